@@ -1,0 +1,61 @@
+"""retarget: drive physically simulated avatars of any body shape from VR headset signals.
+
+The public API: ``hookimpl`` for plugin modules, the plugin base classes, the recipe loader and
+the step data structures. Everything else is an implementation detail.
+"""
+
+from __future__ import annotations
+
+from retarget.errors import MotionError, PluginError, RecipeError, RetargetError, SimulationError
+from retarget.hookspecs import hookimpl
+from retarget.kinds import (
+    Algorithm,
+    Character,
+    Command,
+    MotionFormat,
+    Observer,
+    ObsSpec,
+    Plugin,
+    PluginConfig,
+    RewardConfig,
+    RewardTerm,
+    Scene,
+    Sensor,
+    Termination,
+    VecEnv,
+    gaussian_kernel,
+)
+from retarget.loader import load_plugins
+from retarget.state import Layout, ReferenceBatch, SimState, StepContext
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Algorithm",
+    "Character",
+    "Command",
+    "Layout",
+    "MotionError",
+    "MotionFormat",
+    "ObsSpec",
+    "Observer",
+    "Plugin",
+    "PluginConfig",
+    "PluginError",
+    "RecipeError",
+    "ReferenceBatch",
+    "RetargetError",
+    "RewardConfig",
+    "RewardTerm",
+    "Scene",
+    "Sensor",
+    "SimState",
+    "SimulationError",
+    "StepContext",
+    "Termination",
+    "VecEnv",
+    "__version__",
+    "gaussian_kernel",
+    "hookimpl",
+    "load_plugins",
+]

@@ -1,0 +1,47 @@
+"""Typed base classes, one per plugin kind. Behaviour lives here; hooks only register."""
+
+from __future__ import annotations
+
+from retarget.kinds.algorithm import Algorithm, VecEnv
+from retarget.kinds.base import Plugin, PluginConfig
+from retarget.kinds.character import REQUIRED_GROUPS, REQUIRED_SITES, Character
+from retarget.kinds.command import Command
+from retarget.kinds.motion_format import MotionFormat
+from retarget.kinds.reward import RewardConfig, RewardTerm, gaussian_kernel
+from retarget.kinds.scene import Scene
+from retarget.kinds.sensor import Observer, ObsSpec, Sensor
+from retarget.kinds.termination import Termination
+
+KINDS: dict[str, type[Plugin]] = {
+    "character": Character,
+    "sensor": Sensor,
+    "observer": Observer,
+    "scene": Scene,
+    "reward": RewardTerm,
+    "termination": Termination,
+    "algorithm": Algorithm,
+    "motion_format": MotionFormat,
+    "command": Command,
+}
+"""Kind name -> base class. The registry, recipes and contract suite are all keyed by these."""
+
+__all__ = [
+    "KINDS",
+    "REQUIRED_GROUPS",
+    "REQUIRED_SITES",
+    "Algorithm",
+    "Character",
+    "Command",
+    "MotionFormat",
+    "ObsSpec",
+    "Observer",
+    "Plugin",
+    "PluginConfig",
+    "RewardConfig",
+    "RewardTerm",
+    "Scene",
+    "Sensor",
+    "Termination",
+    "VecEnv",
+    "gaussian_kernel",
+]

@@ -1,0 +1,62 @@
+"""Learning algorithms and the vectorised environment protocol they train on."""
+
+from __future__ import annotations
+
+from abc import abstractmethod
+from collections.abc import Mapping
+from typing import Any, ClassVar, Protocol, runtime_checkable
+
+import torch
+
+from retarget.kinds.base import Plugin
+
+
+@runtime_checkable
+class VecEnv(Protocol):
+    """What an algorithm trains on: N environments stepped together.
+
+    Observations are a mapping of group name (``actor``, ``critic``, ...) to ``(N, D)``
+    float32 tensors; ``step`` returns ``(obs, reward (N,), terminated (N,), truncated (N,),
+    info)``. Environments that end are reset inside ``step``.
+    """
+
+    num_envs: int
+    obs_dims: Mapping[str, int]
+    action_dim: int
+
+    def reset(self) -> Mapping[str, torch.Tensor]: ...
+
+    def step(
+        self, action: torch.Tensor
+    ) -> tuple[Mapping[str, torch.Tensor], torch.Tensor, torch.Tensor, torch.Tensor, dict]: ...
+
+
+class Algorithm(Plugin):
+    """Base class of learning algorithms (PPO, distillation, ...).
+
+    ``setup`` builds networks for an environment; ``train_iteration`` collects one rollout and
+    updates, returning scalar statistics; ``act`` is the deterministic policy used by eval and
+    export. ``state_dict`` must hold everything needed to resume exactly.
+    """
+
+    kind: ClassVar[str] = "algorithm"
+
+    @abstractmethod
+    def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
+        ...
+
+    @abstractmethod
+    def train_iteration(self, env: VecEnv) -> dict[str, float]:
+        ...
+
+    @abstractmethod
+    def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
+        ...
+
+    @abstractmethod
+    def state_dict(self) -> dict[str, Any]:
+        ...
+
+    @abstractmethod
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        ...

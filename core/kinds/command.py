@@ -1,0 +1,26 @@
+"""CLI commands contributed by plugins (``retarget <name> ...``)."""
+
+from __future__ import annotations
+
+import argparse
+from abc import abstractmethod
+from typing import ClassVar
+
+from retarget.kinds.base import Plugin
+
+
+class Command(Plugin):
+    """Base class of subcommands: ``add_arguments`` declares flags, ``run`` returns an exit code.
+
+    Raise :class:`retarget.errors.RetargetError` for user errors: the CLI prints it as one line.
+    """
+
+    kind: ClassVar[str] = "command"
+    help: ClassVar[str] = ""
+
+    def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        """Declare this command's arguments on its own subparser."""
+
+    @abstractmethod
+    def run(self, args: argparse.Namespace) -> int:
+        ...

@@ -1,0 +1,35 @@
+"""Motion formats: readers that turn a file into a clip on the canonical human skeleton."""
+
+from __future__ import annotations
+
+from abc import abstractmethod
+from pathlib import Path
+from typing import TYPE_CHECKING, ClassVar
+
+from retarget.kinds.base import Plugin
+
+if TYPE_CHECKING:
+    from retarget.motion.clip import MotionClip
+
+
+class MotionFormat(Plugin):
+    """Base class of motion readers.
+
+    ``suffixes`` picks the reader for a file (``.bvh``); ``read`` must raise
+    :class:`retarget.errors.MotionError` naming the file (and line where it applies) for any
+    malformed input, and nothing else. ``write_sample`` writes a small valid file so that the
+    contract suite can exercise the reader without shipping data.
+    """
+
+    kind: ClassVar[str] = "motion_format"
+    suffixes: ClassVar[tuple[str, ...]] = ()
+
+    @abstractmethod
+    def read(self, path: Path) -> MotionClip:
+        ...
+
+    @classmethod
+    @abstractmethod
+    def write_sample(cls, directory: Path) -> Path:
+        """Write a small valid file into ``directory`` and return its path."""
+        ...

@@ -1,0 +1,59 @@
+"""Sensors (what the headset gives) and observers (what the policy perceives of the scene)."""
+
+from __future__ import annotations
+
+from abc import abstractmethod
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, ClassVar
+
+import torch
+
+from retarget.kinds.base import Plugin
+
+if TYPE_CHECKING:
+    from retarget.state import Layout, StepContext
+
+
+@dataclass(frozen=True)
+class ObsSpec:
+    """Shape (without the leading ``N``) and dtype of one observation."""
+
+    shape: tuple[int, ...]
+    dtype: torch.dtype = torch.float32
+
+    @property
+    def size(self) -> int:
+        n = 1
+        for s in self.shape:
+            n *= s
+        return n
+
+
+class Sensor(Plugin):
+    """Base class of sensors: batched device signals in the character's heading frame.
+
+    ``bind`` resolves names to indices once; ``observe`` returns ``(N, *spec.shape)`` for the
+    environments in ``ctx`` and must not loop over environments.
+    """
+
+    kind: ClassVar[str] = "sensor"
+
+    def bind(self, layout: Layout) -> None:
+        """Resolve site/body names to indices; called once before the first step."""
+
+    @abstractmethod
+    def spec(self, layout: Layout) -> ObsSpec:
+        ...
+
+    @abstractmethod
+    def observe(self, ctx: StepContext) -> torch.Tensor:
+        ...
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        """Forget per-environment state of ``env_ids`` (stateless sensors ignore this)."""
+
+
+class Observer(Sensor):
+    """Base class of observers: scene perception (height maps, point clouds), batched."""
+
+    kind: ClassVar[str] = "observer"

@@ -1,0 +1,152 @@
+"""Plugin loading: every entry point of the ``retarget`` group, each in isolation.
+
+A plugin that fails to import, registers something invalid or raises inside its hook produces
+one warning naming the plugin, its distribution and the error, and everything else keeps
+working. Strict mode (``--strict-plugins`` / ``RETARGET_STRICT_PLUGINS=1``, and always in the
+contract suite) turns those warnings into :class:`retarget.errors.PluginError`. Duplicate names
+are always errors. ``RETARGET_LOAD_PLUGINS=dist-a,dist-b`` restricts which third-party
+distributions load (retarget's own built-ins always load; an empty value loads none else).
+"""
+
+from __future__ import annotations
+
+import os
+import traceback
+import warnings
+from collections.abc import Iterable, Mapping
+from importlib.metadata import EntryPoint, entry_points
+from types import ModuleType
+
+import pluggy
+
+from retarget import hookspecs
+from retarget.errors import PluginError
+from retarget.registry import Entry, Registry
+
+GROUP = "retarget"
+OWN_DISTRIBUTION = "retarget"
+
+
+class PluginLoadWarning(UserWarning):
+    """A plugin could not be loaded; the rest of retarget keeps working."""
+
+
+def strict_from_env() -> bool:
+    return os.environ.get("RETARGET_STRICT_PLUGINS", "").strip().lower() in {"1", "true", "yes"}
+
+
+def _allowlist() -> set[str] | None:
+    raw = os.environ.get("RETARGET_LOAD_PLUGINS")
+    if raw is None:
+        return None
+    return {part.strip() for part in raw.split(",") if part.strip()}
+
+
+def _dist(ep: EntryPoint) -> tuple[str, str]:
+    dist = getattr(ep, "dist", None)
+    if dist is None:
+        return "unknown", "?"
+    return dist.metadata["Name"] or dist.name, dist.version
+
+
+def _entry_points() -> list[EntryPoint]:
+    return sorted(entry_points(group=GROUP), key=lambda ep: ep.name)
+
+
+def load_plugins(
+    *,
+    strict: bool | None = None,
+    modules: Mapping[str, ModuleType | object] | None = None,
+    use_entry_points: bool = True,
+) -> Registry:
+    """Load all plugins into a fresh :class:`Registry`.
+
+    ``modules`` registers extra plugin objects under the given names (distribution ``local``):
+    tests use it for test doubles, scripts for one-off plugins.
+    """
+    if strict is None:
+        strict = strict_from_env()
+    registry = Registry()
+    pm = pluggy.PluginManager(hookspecs.PROJECT)
+    pm.add_hookspecs(hookspecs)
+    provenance: dict[str, tuple[str, str]] = {}
+
+    def problem(plugin: str, dist: str, what: str, exc: BaseException) -> None:
+        detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+        message = f"plugin '{plugin}' from {dist} {what}: {detail}"
+        if strict:
+            raise PluginError(f"{what}: {detail}", plugin=f"{plugin} ({dist})") from exc
+        registry.problems.append(message)
+        warnings.warn(message, PluginLoadWarning, stacklevel=3)
+
+    candidates: list[tuple[str, str, str, object]] = []
+    if use_entry_points:
+        allow = _allowlist()
+        for ep in _entry_points():
+            dist, version = _dist(ep)
+            if allow is not None and dist != OWN_DISTRIBUTION and dist not in allow:
+                continue
+            try:
+                module = ep.load()
+            except Exception as exc:
+                problem(ep.name, dist, "failed to import", exc)
+                continue
+            candidates.append((ep.name, dist, version, module))
+    for name, module in (modules or {}).items():
+        candidates.append((name, "local", "0", module))
+
+    for name, dist, version, module in candidates:
+        if pm.has_plugin(name):
+            other = provenance[name][0]
+            raise PluginError(
+                f"two plugins share the entry point name '{name}': {other} and {dist}",
+                plugin=name,
+            )
+        try:
+            pm.register(module, name=name)
+        except Exception as exc:
+            problem(name, dist, "has invalid hook implementations", exc)
+            continue
+        provenance[name] = (dist, version)
+    try:
+        pm.check_pending()
+    except pluggy.PluginValidationError as exc:
+        plugin = getattr(exc, "plugin", None)
+        pname = pm.get_name(plugin) if plugin is not None else "?"
+        problem(pname or "?", provenance.get(pname or "", ("?", ""))[0], "implements an unknown hook", exc)
+        if plugin is not None:
+            pm.unregister(plugin)
+
+    for hook_name, kind in hookspecs.HOOK_KINDS.items():
+        caller = getattr(pm.hook, hook_name)
+        for impl in reversed(caller.get_hookimpls()):  # registration order
+            dist, version = provenance.get(impl.plugin_name, ("?", "?"))
+            _call_hook(impl, kind, dist, version, registry, problem)
+    return registry
+
+
+def _call_hook(impl, kind, dist, version, registry, problem) -> None:
+    """Call one plugin's register hook; what it registers lands only if the hook succeeds."""
+    staged: list[Entry] = []
+
+    def register(cls, *, name: str | None = None, aliases: Iterable[str] = ()) -> None:
+        label = name if name is not None else getattr(cls, "name", None)
+        if not isinstance(label, str):
+            raise PluginError(f"{cls!r} has no 'name'", plugin=impl.plugin_name)
+        staged.append(
+            Entry(kind, label, cls, impl.plugin_name, dist, version, tuple(aliases))
+        )
+
+    kwargs = {"register": register} if "register" in impl.argnames else {}
+    try:
+        impl.function(**kwargs)
+    except Exception as exc:
+        problem(impl.plugin_name, dist, f"raised in {kind} registration", exc)
+        return
+    for entry in staged:
+        try:
+            registry.add(entry)
+        except PluginError as exc:
+            if "duplicate" in exc.message:
+                raise
+            problem(impl.plugin_name, dist, "registered an invalid plugin", exc)

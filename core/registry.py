@@ -1,0 +1,109 @@
+"""Registries of plugin classes, one per kind, with attribution to the providing plugin.
+
+Every registered class records which plugin module (entry point) and which distribution
+provided it, so that ``retarget plugins`` can show it and a duplicate name can name both sides.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+from retarget.errors import PluginError
+from retarget.kinds import KINDS, Plugin
+from retarget.kinds.base import NAME_RE
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One registered plugin class and where it came from."""
+
+    kind: str
+    name: str
+    cls: type[Plugin]
+    plugin: str  # the entry point (pluggy plugin) name
+    distribution: str
+    version: str
+    aliases: tuple[str, ...] = ()
+
+    @property
+    def provider(self) -> str:
+        return f"{self.distribution} {self.version} (entry point '{self.plugin}')"
+
+
+@dataclass
+class Registry:
+    """All plugin classes known to one run, keyed by kind and name (aliases resolve too)."""
+
+    entries: dict[str, dict[str, Entry]] = field(
+        default_factory=lambda: {kind: {} for kind in KINDS}
+    )
+    aliases: dict[str, dict[str, str]] = field(
+        default_factory=lambda: {kind: {} for kind in KINDS}
+    )
+    problems: list[str] = field(default_factory=list)
+
+    def add(self, entry: Entry) -> None:
+        """Add ``entry``; a name or alias already taken is an error naming both providers."""
+        base = KINDS[entry.kind]
+        if not (isinstance(entry.cls, type) and issubclass(entry.cls, base)):
+            raise PluginError(
+                f"registered {entry.cls!r} as a {entry.kind}, but it is not a subclass of "
+                f"retarget.kinds.{base.__name__}",
+                plugin=entry.plugin,
+            )
+        for label in (entry.name, *entry.aliases):
+            if not NAME_RE.match(label):
+                raise PluginError(
+                    f"{entry.kind} name '{label}' of {entry.cls.__name__} is not snake_case",
+                    plugin=entry.plugin,
+                )
+            other = self._lookup(entry.kind, label)
+            if other is not None:
+                raise PluginError(
+                    f"duplicate {entry.kind} name '{label}': provided by {other.provider} "
+                    f"and by {entry.provider}",
+                    plugin=entry.plugin,
+                    hint="uninstall one of the two distributions, or restrict loading with "
+                    "RETARGET_LOAD_PLUGINS",
+                )
+        self.entries[entry.kind][entry.name] = entry
+        for alias in entry.aliases:
+            self.aliases[entry.kind][alias] = entry.name
+
+    def _lookup(self, kind: str, name: str) -> Entry | None:
+        table = self.entries[kind]
+        if name in table:
+            return table[name]
+        target = self.aliases[kind].get(name)
+        return table[target] if target is not None else None
+
+    def names(self, kind: str) -> list[str]:
+        return sorted(self.entries[kind])
+
+    def get(self, kind: str, name: str) -> Entry:
+        """The entry for ``name``; an unknown name raises with the choices and close matches."""
+        if kind not in self.entries:
+            raise PluginError(f"unknown plugin kind '{kind}'", hint=_choices(list(KINDS), kind))
+        entry = self._lookup(kind, name)
+        if entry is None:
+            known = self.names(kind) + sorted(self.aliases[kind])
+            raise PluginError(f"unknown {kind} '{name}'", hint=_choices(known, name))
+        return entry
+
+    def __iter__(self) -> Iterator[Entry]:
+        for kind in KINDS:
+            for name in sorted(self.entries[kind]):
+                yield self.entries[kind][name]
+
+
+def _choices(known: list[str], wanted: str) -> str:
+    close = difflib.get_close_matches(wanted, known, n=3, cutoff=0.5)
+    text = f"did you mean {' or '.join(repr(c) for c in close)}? " if close else ""
+    return text + f"available: {', '.join(known) if known else '(none installed)'}"
+
+
+def suggest(known: list[str], wanted: str) -> str:
+    """A 'did you mean ...? available: ...' hint, shared by registry and recipe errors."""
+    return _choices(known, wanted)

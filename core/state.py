@@ -1,0 +1,151 @@
+"""What a reward term, sensor, observer or termination sees each control step.
+
+Every tensor has the environment as its leading dimension ``N``. Plugins resolve names to
+indices once (``bind(layout)``) and then only index tensors, so a step never matches strings
+and never loops over environments in Python.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields, replace
+
+import torch
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Names and index groups of one compiled character, shared by every environment.
+
+    ``sites`` are the role sites every plugin may rely on (``head`` is the headset mount,
+    ``left_hand``/``right_hand`` the controller mounts, ``root``); ``body_groups`` name sets of
+    bodies (``feet``, ``upper_body`` for fall detection, ...). Arrays in :class:`SimState` are
+    ordered as these tuples.
+    """
+
+    body_names: tuple[str, ...]
+    joint_names: tuple[str, ...]
+    actuator_names: tuple[str, ...]
+    site_names: tuple[str, ...]
+    body_groups: Mapping[str, tuple[int, ...]]
+    nq: int
+    nv: int
+    joint_weights: tuple[float, ...] = ()
+    torque_limits: tuple[float, ...] = ()
+    passive_joints: tuple[str, ...] = ()
+
+    @property
+    def nu(self) -> int:
+        return len(self.actuator_names)
+
+    @property
+    def num_bodies(self) -> int:
+        return len(self.body_names)
+
+    def site(self, role: str) -> int:
+        """Index of a role site in ``site_pos``/``site_quat``; raises with the known roles."""
+        try:
+            return self.site_names.index(role)
+        except ValueError:
+            raise KeyError(f"no site role '{role}'; known: {', '.join(self.site_names)}") from None
+
+    def group(self, name: str) -> tuple[int, ...]:
+        """Body indices of a named group; raises with the known groups."""
+        try:
+            return self.body_groups[name]
+        except KeyError:
+            known = ", ".join(sorted(self.body_groups))
+            raise KeyError(f"no body group '{name}'; known: {known}") from None
+
+
+def _select(obj: object, idx: torch.Tensor) -> object:
+    """Rows ``idx`` of every tensor field of a frozen dataclass (other fields kept)."""
+    changes = {}
+    for f in fields(obj):  # type: ignore[arg-type]
+        value = getattr(obj, f.name)
+        if isinstance(value, torch.Tensor) and value.ndim > 0:
+            changes[f.name] = value[idx]
+        elif isinstance(value, Mapping):
+            changes[f.name] = {
+                k: v[idx] if isinstance(v, torch.Tensor) and v.ndim > 0 else v
+                for k, v in value.items()
+            }
+    return replace(obj, **changes)  # type: ignore[type-var]
+
+
+@dataclass(frozen=True)
+class SimState:
+    """Simulated character state gathered once per control step (world frame, Z up)."""
+
+    qpos: torch.Tensor  # (N, nq), free root first: xyz + wxyz quaternion
+    qvel: torch.Tensor  # (N, nv)
+    body_pos: torch.Tensor  # (N, B, 3)
+    body_quat: torch.Tensor  # (N, B, 4) wxyz
+    body_linvel: torch.Tensor  # (N, B, 3)
+    body_angvel: torch.Tensor  # (N, B, 3)
+    site_pos: torch.Tensor  # (N, S, 3)
+    site_quat: torch.Tensor  # (N, S, 4)
+    contact_force: torch.Tensor  # (N, B) normal force magnitude on each body, newtons
+
+    @property
+    def num_envs(self) -> int:
+        return int(self.qpos.shape[0])
+
+    def select(self, idx: torch.Tensor) -> SimState:
+        return _select(self, idx)  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class ReferenceBatch:
+    """The reference each environment tracks at this step.
+
+    ``pose`` is the kinematically retargeted character (same layout as :class:`SimState`),
+    ``devices`` the synthesised device poses over the sensor time window
+    ``(N, W, D, 7)`` (D devices: headset, left, right; position + wxyz quaternion), with
+    ``window_offsets`` the frame offsets of the W entries (0 is now). ``contacts`` are the
+    reference contact labels of the character's ``contact`` body group. ``extras`` holds
+    privileged data (full human pose, future frames) keyed by name.
+    """
+
+    pose: SimState
+    devices: torch.Tensor  # (N, W, D, 7)
+    window_offsets: tuple[int, ...]
+    contacts: torch.Tensor  # (N, C) bool
+    extras: Mapping[str, torch.Tensor] = field(default_factory=dict)
+
+    def select(self, idx: torch.Tensor) -> ReferenceBatch:
+        return replace(
+            self,
+            pose=self.pose.select(idx),
+            devices=self.devices[idx],
+            contacts=self.contacts[idx],
+            extras={k: v[idx] for k, v in self.extras.items()},
+        )
+
+
+@dataclass(frozen=True)
+class StepContext:
+    """Everything one control step exposes to plugins; frozen so no plugin can mutate it."""
+
+    layout: Layout
+    sim: SimState
+    ref: ReferenceBatch
+    action: torch.Tensor  # (N, nu) in [-1, 1]
+    prev_action: torch.Tensor  # (N, nu)
+    episode_step: torch.Tensor  # (N,) int64
+    dt: float
+
+    @property
+    def num_envs(self) -> int:
+        return self.sim.num_envs
+
+    def select(self, idx: torch.Tensor) -> StepContext:
+        """The same step restricted to environments ``idx`` (used to check batch invariance)."""
+        return replace(
+            self,
+            sim=self.sim.select(idx),
+            ref=self.ref.select(idx),
+            action=self.action[idx],
+            prev_action=self.prev_action[idx],
+            episode_step=self.episode_step[idx],
+        )

@@ -1,0 +1,29 @@
+"""The episode length cap: a time-out, so PPO bootstraps instead of treating it as a failure."""
+
+from __future__ import annotations
+
+import torch
+from pydantic import Field
+
+import retarget
+from retarget import PluginConfig, StepContext, Termination
+
+
+class EpisodeCapConfig(PluginConfig):
+    max_steps: int = Field(300, gt=0, description="control steps per episode (300 = 8.3 s at 36 Hz)")
+
+
+class EpisodeCap(Termination):
+    """Ends an episode after ``max_steps`` control steps (a truncation, not a failure)."""
+
+    name = "episode_cap"
+    Config = EpisodeCapConfig
+    time_out = True
+
+    def check(self, ctx: StepContext) -> torch.Tensor:
+        return ctx.episode_step >= self.config.max_steps
+
+
+@retarget.hookimpl
+def register_terminations(register) -> None:
+    register(EpisodeCap)
