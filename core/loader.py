@@ -113,7 +113,12 @@ def load_plugins(
     except pluggy.PluginValidationError as exc:
         plugin = getattr(exc, "plugin", None)
         pname = pm.get_name(plugin) if plugin is not None else "?"
-        problem(pname or "?", provenance.get(pname or "", ("?", ""))[0], "implements an unknown hook", exc)
+        problem(
+            pname or "?",
+            provenance.get(pname or "", ("?", ""))[0],
+            "implements an unknown hook",
+            exc,
+        )
         if plugin is not None:
             pm.unregister(plugin)
 
@@ -133,9 +138,7 @@ def _call_hook(impl, kind, dist, version, registry, problem) -> None:
         label = name if name is not None else getattr(cls, "name", None)
         if not isinstance(label, str):
             raise PluginError(f"{cls!r} has no 'name'", plugin=impl.plugin_name)
-        staged.append(
-            Entry(kind, label, cls, impl.plugin_name, dist, version, tuple(aliases))
-        )
+        staged.append(Entry(kind, label, cls, impl.plugin_name, dist, version, tuple(aliases)))
 
     kwargs = {"register": register} if "register" in impl.argnames else {}
     try:

@@ -39,9 +39,7 @@ class Registry:
     entries: dict[str, dict[str, Entry]] = field(
         default_factory=lambda: {kind: {} for kind in KINDS}
     )
-    aliases: dict[str, dict[str, str]] = field(
-        default_factory=lambda: {kind: {} for kind in KINDS}
-    )
+    aliases: dict[str, dict[str, str]] = field(default_factory=lambda: {kind: {} for kind in KINDS})
     problems: list[str] = field(default_factory=list)
 
     def add(self, entry: Entry) -> None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
+from typing import Any
 
 import torch
 
@@ -24,9 +25,11 @@ class Layout:
     """
 
     body_names: tuple[str, ...]
+    body_ids: tuple[int, ...]  # MuJoCo body ids, in the order of the (N, B, ...) arrays
     joint_names: tuple[str, ...]
     actuator_names: tuple[str, ...]
-    site_names: tuple[str, ...]
+    site_names: tuple[str, ...]  # role names, in the order of site_pos/site_quat
+    site_ids: tuple[int, ...]  # MuJoCo site ids of those roles in the compiled model
     body_groups: Mapping[str, tuple[int, ...]]
     nq: int
     nv: int
@@ -134,6 +137,7 @@ class StepContext:
     prev_action: torch.Tensor  # (N, nu)
     episode_step: torch.Tensor  # (N,) int64
     dt: float
+    scene: Any = None  # the Scene plugin instance, for observers' batched geometry queries
 
     @property
     def num_envs(self) -> int:

@@ -33,6 +33,9 @@ class Plugin(ABC):
     name: ClassVar[str]
     kind: ClassVar[str] = "plugin"
     Config: ClassVar[type[PluginConfig]] = PluginConfig
+    requires: ClassVar[tuple[str, ...]] = ()
+    """What the character must provide, e.g. ``("site:head", "body_group:feet")``: checked
+    when a recipe is resolved, before anything is built."""
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         if config is None:

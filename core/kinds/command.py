@@ -22,5 +22,4 @@ class Command(Plugin):
         """Declare this command's arguments on its own subparser."""
 
     @abstractmethod
-    def run(self, args: argparse.Namespace) -> int:
-        ...
+    def run(self, args: argparse.Namespace) -> int: ...

@@ -25,8 +25,7 @@ class MotionFormat(Plugin):
     suffixes: ClassVar[tuple[str, ...]] = ()
 
     @abstractmethod
-    def read(self, path: Path) -> MotionClip:
-        ...
+    def read(self, path: Path) -> MotionClip: ...
 
     @classmethod
     @abstractmethod

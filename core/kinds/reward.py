@@ -39,8 +39,7 @@ class RewardTerm(Plugin):
         """Resolve joint/body names and weights to index tensors once."""
 
     @abstractmethod
-    def compute(self, ctx: StepContext) -> torch.Tensor:
-        ...
+    def compute(self, ctx: StepContext) -> torch.Tensor: ...
 
     def reset(self, env_ids: torch.Tensor) -> None:
         """Forget per-environment state of ``env_ids`` (only stateful terms need this)."""

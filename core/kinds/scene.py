@@ -25,8 +25,7 @@ class Scene(Plugin):
     kind: ClassVar[str] = "scene"
 
     @abstractmethod
-    def build(self, spec: mujoco.MjSpec) -> None:
-        ...
+    def build(self, spec: mujoco.MjSpec) -> None: ...
 
     @abstractmethod
     def height_at(self, xy: torch.Tensor) -> torch.Tensor:

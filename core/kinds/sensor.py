@@ -42,12 +42,10 @@ class Sensor(Plugin):
         """Resolve site/body names to indices; called once before the first step."""
 
     @abstractmethod
-    def spec(self, layout: Layout) -> ObsSpec:
-        ...
+    def spec(self, layout: Layout) -> ObsSpec: ...
 
     @abstractmethod
-    def observe(self, ctx: StepContext) -> torch.Tensor:
-        ...
+    def observe(self, ctx: StepContext) -> torch.Tensor: ...
 
     def reset(self, env_ids: torch.Tensor) -> None:
         """Forget per-environment state of ``env_ids`` (stateless sensors ignore this)."""

@@ -27,8 +27,7 @@ class Termination(Plugin):
         """Resolve names to indices once."""
 
     @abstractmethod
-    def check(self, ctx: StepContext) -> torch.Tensor:
-        ...
+    def check(self, ctx: StepContext) -> torch.Tensor: ...
 
     def reset(self, env_ids: torch.Tensor) -> None:
         """Forget per-environment state of ``env_ids``."""

@@ -1,4 +1,4 @@
-"""Action regularisers of App. A: smooth actions (``action_diff``) and small actions (``action_min``).
+"""Action regularisers of App. A: smooth (``action_diff``) and small (``action_min``) actions.
 
 Both use the Gaussian kernel on a squared norm, so a still, smooth policy earns the full weight.
 """

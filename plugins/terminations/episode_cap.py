@@ -10,7 +10,9 @@ from retarget import PluginConfig, StepContext, Termination
 
 
 class EpisodeCapConfig(PluginConfig):
-    max_steps: int = Field(300, gt=0, description="control steps per episode (300 = 8.3 s at 36 Hz)")
+    max_steps: int = Field(
+        300, gt=0, description="control steps per episode (300 = 8.3 s at 36 Hz)"
+    )
 
 
 class EpisodeCap(Termination):

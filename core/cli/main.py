@@ -1,0 +1,101 @@
+"""The ``retarget`` command: core verbs plus the commands plugins register.
+
+User errors (:class:`retarget.errors.RetargetError`) print as one readable message and exit 2;
+no traceback. Plugins are loaded once per invocation; a broken plugin is a warning unless
+``--strict-plugins`` / ``RETARGET_STRICT_PLUGINS=1``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import traceback
+import warnings
+from collections.abc import Sequence
+
+import retarget
+from retarget.cli import plugins_cmd, recipe_cmd
+from retarget.cli.console import error, warning
+from retarget.errors import RetargetError
+from retarget.kinds import Command
+from retarget.loader import PluginLoadWarning, load_plugins, strict_from_env
+from retarget.registry import Registry
+
+EXIT_USER_ERROR = 2
+
+
+def build_parser(registry: Registry) -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="retarget",
+        description="Drive physically simulated avatars of any body shape from VR headset "
+        "signals: train, evaluate and inspect policies and plugins.",
+    )
+    parser.add_argument("--version", action="version", version=f"retarget {retarget.__version__}")
+    parser.add_argument(
+        "--strict-plugins",
+        action="store_true",
+        help="fail if any plugin cannot be loaded (also RETARGET_STRICT_PLUGINS=1)",
+    )
+    sub = parser.add_subparsers(dest="verb", metavar="COMMAND")
+    plugins_cmd.add_parser(sub)
+    recipe_cmd.add_parser(sub)
+    for name in registry.names("command"):
+        entry = registry.get("command", name)
+        _add_plugin_command(sub, entry.cls, entry.plugin)
+    return parser
+
+
+def _add_plugin_command(sub: argparse._SubParsersAction, cls: type[Command], plugin: str) -> None:
+    command = cls()
+    parser = sub.add_parser(cls.name, help=cls.help or cls.summary(), description=cls.__doc__)
+    command.add_arguments(parser)
+
+    def handler(args: argparse.Namespace, registry: Registry) -> int:
+        args.registry = registry
+        return int(command.run(args) or 0)
+
+    parser.set_defaults(handler=handler, plugin_name=plugin)
+
+
+def _load(strict: bool) -> Registry:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PluginLoadWarning)
+        registry = load_plugins(strict=strict)
+    for item in caught:
+        if issubclass(item.category, PluginLoadWarning):
+            warning(str(item.message))
+        else:
+            warnings.showwarning(item.message, item.category, item.filename, item.lineno)
+    return registry
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    strict = "--strict-plugins" in argv or strict_from_env()
+    try:
+        registry = _load(strict)
+        parser = build_parser(registry)
+        args = parser.parse_args(argv)
+        if getattr(args, "handler", None) is None:
+            parser.print_help()
+            return 0
+        return int(args.handler(args, registry) or 0)
+    except RetargetError as exc:
+        error(exc.format())
+        return EXIT_USER_ERROR
+    except KeyboardInterrupt:
+        error("interrupted")
+        return 130
+    except Exception:
+        plugin = getattr(locals().get("args"), "plugin_name", None)
+        where = f" in plugin '{plugin}'" if plugin else ""
+        error(f"unexpected failure{where}:")
+        traceback.print_exc()
+        if os.environ.get("RETARGET_DEBUG"):
+            raise
+        return 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

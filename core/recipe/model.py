@@ -1,0 +1,94 @@
+"""The structure of a recipe (phase 1 of validation: shape only, plugin parameters untyped).
+
+A recipe names one component per slot (``character``, ``scene``, ``algorithm``), lists of
+components (``sensors``, ``observers``) and named tables (``rewards``, ``terminations``). Each
+component is ``{type: NAME, ...params}`` or just ``NAME``; parameters are validated against the
+plugin's own ``Config`` in phase 2 (:mod:`retarget.recipe.resolve`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+
+class Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class ComponentRef(BaseModel):
+    """``{type: NAME, ...params}``; the parameters stay untyped until the plugin is known."""
+
+    model_config = ConfigDict(extra="allow")
+
+    type: str = Field(description="registered plugin name (see `retarget plugins`)")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _shorthand(cls, value: Any) -> Any:
+        if isinstance(value, str):
+            return {"type": value}
+        return value
+
+    @property
+    def params(self) -> dict[str, Any]:
+        return dict(self.model_extra or {})
+
+
+class MotionsSection(Strict):
+    """Where the human motion comes from; ``path: null`` uses the packaged generated set."""
+
+    path: str | None = Field(
+        None, description="file or directory of clips; RETARGET_DATA is used when unset"
+    )
+    format: ComponentRef | None = Field(
+        None, description="motion format plugin; chosen by file suffix when unset"
+    )
+
+
+class Recipe(Strict):
+    """A complete, declarative description of one training or evaluation setup."""
+
+    name: str | None = Field(None, description="run name (defaults to character-sensors)")
+    seed: int = 0
+    character: ComponentRef
+    scene: ComponentRef | None = None
+    sensors: list[ComponentRef] = Field(default_factory=list)
+    observers: list[ComponentRef] = Field(default_factory=list)
+    rewards: dict[str, ComponentRef] = Field(default_factory=dict)
+    terminations: dict[str, ComponentRef] = Field(default_factory=dict)
+    algorithm: ComponentRef | None = None
+    motions: MotionsSection = Field(default_factory=MotionsSection)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _table_types_default_to_key(cls, value: Any) -> Any:
+        """In ``rewards``/``terminations`` tables, ``type`` defaults to the entry's key."""
+        if not isinstance(value, dict):
+            return value
+        value = dict(value)
+        for table in ("rewards", "terminations"):
+            entries = value.get(table)
+            if isinstance(entries, dict):
+                fixed = {}
+                for key, entry in entries.items():
+                    if entry is None:
+                        entry = {}
+                    if isinstance(entry, dict) and "type" not in entry:
+                        entry = {"type": key, **entry}
+                    fixed[key] = entry
+                value[table] = fixed
+        return value
+
+
+SLOTS: dict[str, str] = {
+    "character": "character",
+    "scene": "scene",
+    "sensors": "sensor",
+    "observers": "observer",
+    "rewards": "reward",
+    "terminations": "termination",
+    "algorithm": "algorithm",
+}
+"""Recipe field -> plugin kind of the components it holds."""

@@ -1,0 +1,429 @@
+"""The plugin contract, one function per check, grouped by plugin kind.
+
+Each check takes the plugin (a class, or an instance whose ``config`` is used) and raises
+``AssertionError`` with a message that says what to fix. Third-party packages run the same
+checks through :func:`retarget.testing.parametrize_with_checks`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import io
+import math
+import sys
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pluggy
+import torch
+import yaml
+from pydantic import ValidationError
+
+from retarget import hookspecs
+from retarget.errors import MotionError
+from retarget.kinds import KINDS, Plugin, PluginConfig
+from retarget.kinds.base import NAME_RE
+from retarget.loader import load_plugins
+from retarget.testing.fakes import FakeVecEnv, TinyCharacter, fake_context, tiny_world
+from retarget.testing.guard import NoPerEnvLoops
+from retarget.world import build_world
+
+Check = Callable[[object], None]
+BATCH_SIZES = (1, 4, 7)
+GUARD_BATCH = 13  # a size no tiny-character dimension has, so integer indexing is attributable
+
+
+def plugin_class(plugin: object) -> type[Plugin]:
+    return plugin if isinstance(plugin, type) else type(plugin)
+
+
+def kind_of(plugin: object) -> str:
+    cls = plugin_class(plugin)
+    for kind, base in KINDS.items():
+        if kind != "sensor" and issubclass(cls, base):
+            return kind
+    if issubclass(cls, KINDS["sensor"]):
+        return "sensor"
+    raise AssertionError(f"{cls.__name__} subclasses none of retarget.kinds' base classes")
+
+
+def make(plugin: object) -> Plugin:
+    """A fresh instance with the plugin's config (so stateful plugins start clean)."""
+    cls = plugin_class(plugin)
+    config = plugin.config if isinstance(plugin, Plugin) else None
+    return cls(config)
+
+
+# ---------------------------------------------------------------- every kind
+
+
+def check_name(plugin: object) -> None:
+    cls = plugin_class(plugin)
+    name = getattr(cls, "name", None)
+    assert isinstance(name, str), f"{cls.__name__} must set a class attribute `name`"
+    assert NAME_RE.match(name), f"name {name!r} of {cls.__name__} must be snake_case"
+
+
+def check_docstring(plugin: object) -> None:
+    cls = plugin_class(plugin)
+    assert (cls.__doc__ or "").strip(), (
+        f"{cls.__name__} needs a class docstring: it is the help `retarget plugins show` prints"
+    )
+    assert "__doc__" in vars(cls), f"{cls.__name__} inherits its docstring; write its own"
+
+
+def check_config_strict(plugin: object) -> None:
+    cls = plugin_class(plugin)
+    config_cls = cls.Config
+    assert isinstance(config_cls, type) and issubclass(config_cls, PluginConfig), (
+        f"{cls.__name__}.Config must subclass retarget.PluginConfig"
+    )
+    assert config_cls.model_config.get("extra") == "forbid", "Config must forbid unknown fields"
+    assert config_cls.model_config.get("frozen") is True, "Config must be frozen"
+    try:
+        default = config_cls()
+    except ValidationError as exc:
+        raise AssertionError(
+            f"{cls.__name__}.Config() must work with defaults only: {exc.errors()[0]['msg']}"
+        ) from None
+    try:
+        config_cls(__retarget_unknown_field__=1)
+    except ValidationError:
+        pass
+    else:
+        raise AssertionError("Config accepted an unknown field")
+    text = yaml.safe_dump(default.model_dump(mode="json"))
+    assert config_cls.model_validate(yaml.safe_load(text)) == default, (
+        "Config does not survive a YAML round trip (recipe.lock.yaml relies on it)"
+    )
+
+
+def check_config_schema(plugin: object) -> None:
+    schema = plugin_class(plugin).Config.model_json_schema()
+    assert schema.get("type") == "object", "Config JSON Schema must describe an object"
+
+
+def check_registers_cleanly(plugin: object) -> None:
+    """The plugin's module registers it through a hook, with no validation errors."""
+    cls = plugin_class(plugin)
+    module = sys.modules[cls.__module__]
+    pm = pluggy.PluginManager(hookspecs.PROJECT)
+    pm.add_hookspecs(hookspecs)
+    pm.register(module, name=f"check::{cls.__module__}")
+    pm.check_pending()
+    found = []
+    for hook_name in hookspecs.HOOK_KINDS:
+        getattr(pm.hook, hook_name)(register=lambda c, **_: found.append(c))
+    assert cls in found, (
+        f"module {cls.__module__} has no @retarget.hookimpl that registers {cls.__name__}"
+    )
+
+
+def check_entry_point(plugin: object) -> None:
+    """The plugin is reachable through installed entry-point metadata (the real load path)."""
+    cls = plugin_class(plugin)
+    registry = load_plugins(strict=True)
+    kind = kind_of(plugin)
+    entries = [e for e in registry.entries[kind].values() if e.cls is cls]
+    assert entries, (
+        f"{cls.__name__} is not registered through any installed entry point of group "
+        "'retarget': add it to [project.entry-points.retarget] and reinstall"
+    )
+
+
+# ---------------------------------------------------------------- batched step plugins
+
+
+def _bound(plugin: object, layout):
+    inst = make(plugin)
+    inst.bind(layout)
+    return inst
+
+
+def _run(inst: Plugin, kind: str, ctx) -> torch.Tensor:
+    if kind == "reward":
+        return inst.compute(ctx)
+    if kind == "termination":
+        return inst.check(ctx)
+    return inst.observe(ctx)
+
+
+def _expected(inst: Plugin, kind: str, layout) -> tuple[tuple[int, ...], torch.dtype]:
+    if kind == "reward":
+        return (), torch.float32
+    if kind == "termination":
+        return (), torch.bool
+    spec = inst.spec(layout)
+    return tuple(spec.shape), spec.dtype
+
+
+def check_batched_shapes(plugin: object) -> None:
+    kind = kind_of(plugin)
+    layout = tiny_world().layout
+    for n in BATCH_SIZES:
+        inst = _bound(plugin, layout)
+        out = _run(inst, kind, fake_context(layout, n, seed=n))
+        shape, dtype = _expected(inst, kind, layout)
+        assert isinstance(out, torch.Tensor), f"returned {type(out).__name__}, not a tensor"
+        assert tuple(out.shape) == (n, *shape), f"N={n}: shape {tuple(out.shape)} != {(n, *shape)}"
+        assert out.dtype == dtype, f"N={n}: dtype {out.dtype}, expected {dtype}"
+
+
+def check_finite(plugin: object) -> None:
+    kind = kind_of(plugin)
+    layout = tiny_world().layout
+    out = _run(_bound(plugin, layout), kind, fake_context(layout, 7, seed=3))
+    if out.is_floating_point():
+        assert torch.isfinite(out).all(), "output has NaN or Inf on valid input"
+
+
+def check_batch_invariance(plugin: object) -> None:
+    """Computing a subset of environments equals slicing the whole: no coupling across envs."""
+    kind = kind_of(plugin)
+    layout = tiny_world().layout
+    ctx = fake_context(layout, 7, seed=11)
+    full = _run(_bound(plugin, layout), kind, ctx)
+    idx = torch.tensor([1, 3, 4, 6])
+    part = _run(_bound(plugin, layout), kind, ctx.select(idx))
+    same = (
+        torch.equal(part, full[idx])
+        if not part.is_floating_point()
+        else torch.allclose(part, full[idx], atol=1e-5, rtol=1e-5)
+    )
+    assert same, "result for a subset of environments differs from the same rows of the full batch"
+
+
+def check_deterministic(plugin: object) -> None:
+    kind = kind_of(plugin)
+    layout = tiny_world().layout
+    ctx = fake_context(layout, 4, seed=5)
+    a = _run(_bound(plugin, layout), kind, ctx)
+    b = _run(_bound(plugin, layout), kind, ctx)
+    assert torch.equal(a, b), "two fresh instances disagree on the same input"
+
+
+def check_subset_reset(plugin: object) -> None:
+    kind = kind_of(plugin)
+    layout = tiny_world().layout
+    inst = _bound(plugin, layout)
+    ctx = fake_context(layout, 7, seed=2)
+    _run(inst, kind, ctx)
+    inst.reset(torch.tensor([0, 5]))
+    out = _run(inst, kind, ctx)
+    assert out.shape[0] == 7, "after reset(subset) the batch size changed"
+
+
+def check_vectorised(plugin: object) -> None:
+    """No per-environment Python access in ``compute``/``check``/``observe``."""
+    kind = kind_of(plugin)
+    layout = tiny_world().layout
+    inst = _bound(plugin, layout)
+    ctx = fake_context(layout, GUARD_BATCH, seed=7)
+    with NoPerEnvLoops(GUARD_BATCH):
+        _run(inst, kind, ctx)
+
+
+def check_spec(plugin: object) -> None:
+    inst = make(plugin)
+    spec = inst.spec(tiny_world().layout)
+    assert all(isinstance(s, int) and s > 0 for s in spec.shape), f"bad ObsSpec shape {spec.shape}"
+
+
+# ---------------------------------------------------------------- characters
+
+
+def _world(plugin: object):
+    return build_world(make(plugin))
+
+
+def check_character_compiles(plugin: object) -> None:
+    world = _world(plugin)
+    assert world.model.nu > 0, "a character needs at least one actuator"
+    assert world.layout.num_bodies > 1, "a character needs more than a root body"
+
+
+def check_character_passive_unactuated(plugin: object) -> None:
+    world = _world(plugin)
+    m = world.model
+    actuated = {
+        mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, m.actuator_trnid[a, 0]) for a in range(m.nu)
+    }
+    both = sorted(set(world.layout.passive_joints) & actuated)
+    assert not both, f"passive joints must have no actuator: {', '.join(both)}"
+    for joint in world.layout.passive_joints:
+        assert mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, joint) >= 0, (
+            f"passive joint '{joint}' does not exist"
+        )
+
+
+def check_character_torque_limits(plugin: object) -> None:
+    m = _world(plugin).model
+    for a in range(m.nu):
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a)
+        assert m.actuator_ctrllimited[a], f"actuator '{name}' must have ctrlrange [-1, 1]"
+        assert np.allclose(m.actuator_ctrlrange[a], [-1, 1]), (
+            f"actuator '{name}' ctrlrange {m.actuator_ctrlrange[a]} must be [-1, 1] "
+            "(the torque limit is the gear)"
+        )
+        assert m.actuator_gear[a, 0] > 0, f"actuator '{name}' needs a positive gear (torque limit)"
+
+
+def check_character_zero_torque_steps(plugin: object) -> None:
+    world = _world(plugin)
+    data = mujoco.MjData(world.model)
+    mujoco.mj_forward(world.model, data)
+    for _ in range(10):
+        mujoco.mj_step(world.model, data)
+    assert np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all(), (
+        "10 zero-torque steps produced non-finite state"
+    )
+
+
+# ---------------------------------------------------------------- scenes
+
+
+def check_scene_composes(plugin: object) -> None:
+    scene = make(plugin)
+    world = build_world(TinyCharacter(), scene)
+    data = mujoco.MjData(world.model)
+    for _ in range(10):
+        mujoco.mj_step(world.model, data)
+    assert np.isfinite(data.qpos).all(), "tiny character in this scene went non-finite"
+
+
+def check_scene_queries(plugin: object) -> None:
+    scene = make(plugin)
+    for n in BATCH_SIZES:
+        xy = torch.rand(n, 9, 2) * 2 - 1
+        h = scene.height_at(xy)
+        assert tuple(h.shape) == (n, 9), f"height_at shape {tuple(h.shape)} != {(n, 9)}"
+        assert h.dtype == torch.float32 and torch.isfinite(h).all(), "height_at must be finite f32"
+    pts = scene.surface_points(64, np.random.default_rng(0))
+    assert pts.shape == (64, 3) and np.isfinite(pts).all(), "surface_points must be (count, 3)"
+    scene.randomize(torch.tensor([0, 2]), torch.Generator().manual_seed(0))
+
+
+# ---------------------------------------------------------------- algorithms
+
+
+def check_algorithm_update(plugin: object) -> None:
+    env = FakeVecEnv(num_envs=4)
+    algo = make(plugin)
+    algo.setup(env, torch.Generator().manual_seed(0))
+    stats = algo.train_iteration(env)
+    assert isinstance(stats, dict) and stats, "train_iteration must return statistics"
+    bad = {k: v for k, v in stats.items() if not math.isfinite(float(v))}
+    assert not bad, f"non-finite training statistics: {bad}"
+    obs = env.reset()
+    action = algo.act(obs)
+    assert tuple(action.shape) == (4, env.action_dim), f"act shape {tuple(action.shape)}"
+    assert torch.isfinite(action).all(), "act returned non-finite actions"
+
+
+def check_algorithm_checkpoint(plugin: object) -> None:
+    env = FakeVecEnv(num_envs=4, seed=1)
+    algo = make(plugin)
+    algo.setup(env, torch.Generator().manual_seed(0))
+    algo.train_iteration(env)
+    buffer = io.BytesIO()
+    torch.save(algo.state_dict(), buffer)
+    buffer.seek(0)
+    other = make(plugin)
+    other.setup(env, torch.Generator().manual_seed(123))
+    other.load_state_dict(torch.load(buffer, weights_only=False))
+    obs = env.reset()
+    assert torch.equal(algo.act(obs), other.act(obs)), "a restored checkpoint acts differently"
+
+
+# ---------------------------------------------------------------- motion formats
+
+
+def check_motion_format_reads_sample(plugin: object) -> None:
+    fmt = make(plugin)
+    with tempfile.TemporaryDirectory() as tmp:
+        path = plugin_class(plugin).write_sample(Path(tmp))
+        clip = fmt.read(path)
+    assert float(clip.fps) > 0, "clip.fps must be positive"
+    for key, value in vars(clip).items():
+        if isinstance(value, np.ndarray) and value.dtype.kind == "f":
+            assert np.isfinite(value).all(), f"clip.{key} has non-finite values"
+
+
+def check_motion_format_rejects_garbage(plugin: object) -> None:
+    cls = plugin_class(plugin)
+    fmt = make(plugin)
+    suffix = cls.suffixes[0] if cls.suffixes else ".dat"
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, content in (("empty", b""), ("garbage", b"\x00\xff not a motion file {[")):
+            path = Path(tmp) / f"{label}{suffix}"
+            path.write_bytes(content)
+            try:
+                fmt.read(path)
+            except MotionError as exc:
+                assert exc.file is not None and Path(exc.file).name == path.name, (
+                    f"MotionError for the {label} file must name the file"
+                )
+            except Exception as exc:
+                raise AssertionError(
+                    f"{label} file raised {type(exc).__name__}, expected retarget.MotionError"
+                ) from exc
+            else:
+                raise AssertionError(f"reading an {label} file did not raise MotionError")
+
+
+# ---------------------------------------------------------------- commands
+
+
+def check_command_arguments(plugin: object) -> None:
+    cmd = make(plugin)
+    parser = argparse.ArgumentParser(prog=f"retarget {plugin_class(plugin).name}")
+    cmd.add_arguments(parser)
+    assert callable(cmd.run), "a command needs run(args)"
+    assert len(inspect.signature(cmd.run).parameters) == 1, "run takes exactly (args)"
+
+
+# ---------------------------------------------------------------- the table
+
+COMMON: tuple[Check, ...] = (
+    check_name,
+    check_docstring,
+    check_config_strict,
+    check_config_schema,
+    check_registers_cleanly,
+)
+STEP: tuple[Check, ...] = (
+    check_batched_shapes,
+    check_finite,
+    check_batch_invariance,
+    check_deterministic,
+    check_subset_reset,
+    check_vectorised,
+)
+BY_KIND: dict[str, tuple[Check, ...]] = {
+    "reward": STEP,
+    "termination": STEP,
+    "sensor": (check_spec, *STEP),
+    "observer": (check_spec, *STEP),
+    "character": (
+        check_character_compiles,
+        check_character_passive_unactuated,
+        check_character_torque_limits,
+        check_character_zero_torque_steps,
+    ),
+    "scene": (check_scene_composes, check_scene_queries),
+    "algorithm": (check_algorithm_update, check_algorithm_checkpoint),
+    "motion_format": (check_motion_format_reads_sample, check_motion_format_rejects_garbage),
+    "command": (check_command_arguments,),
+}
+
+
+def checks_for(plugin: object, *, installed: bool = True) -> list[Check]:
+    """Every check that applies to ``plugin``; ``installed=False`` skips the entry-point check."""
+    found = [*COMMON, *BY_KIND[kind_of(plugin)]]
+    if installed:
+        found.append(check_entry_point)
+    return found

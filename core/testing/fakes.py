@@ -1,0 +1,251 @@
+"""Small, real stand-ins the contract suite runs plugins against.
+
+``TinyCharacter`` is a genuine MuJoCo character (free root, a torso with a head site, two arms
+with hand sites, two legs, a passive tail joint) small enough to compile in milliseconds;
+``fake_context`` fills a :class:`StepContext` with random but *valid* state (unit quaternions,
+non-negative forces) for any layout and number of environments.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import mujoco
+import numpy as np
+import torch
+
+from retarget.kinds import Character, Scene
+from retarget.state import Layout, ReferenceBatch, SimState, StepContext
+from retarget.world import World, add_floor, build_world
+
+_CAPSULE = mujoco.mjtGeom.mjGEOM_CAPSULE
+_HINGE = mujoco.mjtJoint.mjJNT_HINGE
+
+
+class TinyCharacter(Character):
+    """A seven-body test character: pelvis, torso, two arms, two legs and a passive tail."""
+
+    name = "tiny"
+
+    def build_spec(self) -> mujoco.MjSpec:
+        spec = mujoco.MjSpec()
+        spec.option.timestep = 1 / 240
+        pelvis = spec.worldbody.add_body(name="pelvis", pos=[0, 0, 0.9])
+        pelvis.add_freejoint(name="root")
+        pelvis.add_geom(type=_CAPSULE, size=[0.1, 0.1, 0], density=1000, contype=2, conaffinity=1)
+        pelvis.add_site(name="root")
+        torso = pelvis.add_body(name="torso", pos=[0, 0, 0.25])
+        self._hinge(spec, torso, "spine", [0, 1, 0], 100.0)
+        torso.add_geom(
+            type=_CAPSULE,
+            fromto=[0, 0, 0, 0, 0, 0.3],
+            size=[0.08, 0, 0],
+            density=1000,
+            contype=2,
+            conaffinity=1,
+        )
+        torso.add_site(name="head", pos=[0, 0, 0.45])
+        for side, y in (("left", 0.2), ("right", -0.2)):
+            arm = torso.add_body(name=f"{side}_arm", pos=[0, y, 0.25])
+            self._hinge(spec, arm, f"{side}_shoulder", [1, 0, 0], 50.0)
+            arm.add_geom(
+                type=_CAPSULE,
+                fromto=[0, 0, 0, 0, 0, -0.5],
+                size=[0.04, 0, 0],
+                density=1000,
+                contype=2,
+                conaffinity=1,
+            )
+            arm.add_site(name=f"{side}_hand", pos=[0, 0, -0.5])
+            leg = pelvis.add_body(name=f"{side}_leg", pos=[0, y / 2, -0.1])
+            self._hinge(spec, leg, f"{side}_hip", [0, 1, 0], 150.0)
+            leg.add_geom(
+                type=_CAPSULE,
+                fromto=[0, 0, 0, 0, 0, -0.75],
+                size=[0.05, 0, 0],
+                density=1000,
+                contype=2,
+                conaffinity=1,
+            )
+        tail = pelvis.add_body(name="tail", pos=[-0.12, 0, 0])
+        tail.add_joint(
+            name="tail_swing",
+            type=_HINGE,
+            axis=[0, 0, 1],
+            stiffness=5.0,
+            damping=0.5,
+            range=[-1.0, 1.0],
+        )
+        tail.add_geom(
+            type=_CAPSULE,
+            fromto=[0, 0, 0, -0.3, 0, 0],
+            size=[0.02, 0, 0],
+            density=500,
+            contype=2,
+            conaffinity=1,
+        )
+        return spec
+
+    @staticmethod
+    def _hinge(spec: mujoco.MjSpec, body: mujoco.MjsBody, name: str, axis, limit: float) -> None:
+        body.add_joint(
+            name=name, type=_HINGE, axis=axis, range=[-1.5, 1.5], damping=2.0, armature=0.01
+        )
+        act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.gear[0] = limit
+        act.ctrllimited = True
+        act.ctrlrange = [-1.0, 1.0]
+
+    def site_roles(self) -> Mapping[str, str]:
+        return {
+            "head": "head",
+            "left_hand": "left_hand",
+            "right_hand": "right_hand",
+            "root": "root",
+        }
+
+    def body_groups(self) -> Mapping[str, Sequence[str]]:
+        return {"feet": ["left_leg", "right_leg"], "upper_body": ["torso", "left_arm", "right_arm"]}
+
+    def passive_joints(self) -> Sequence[str]:
+        return ("tail_swing",)
+
+
+class FlatScene(Scene):
+    """A flat floor at height 0: the scene the contract suite gives observers."""
+
+    name = "flat_test"
+
+    def build(self, spec: mujoco.MjSpec) -> None:
+        add_floor(spec)
+
+    def height_at(self, xy: torch.Tensor) -> torch.Tensor:
+        return torch.zeros(xy.shape[:-1], dtype=torch.float32)
+
+    def surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
+        pts = rng.uniform(-2.0, 2.0, size=(count, 3))
+        pts[:, 2] = 0.0
+        return pts
+
+
+_TINY_WORLD: World | None = None
+
+
+def tiny_world() -> World:
+    """The compiled TinyCharacter on a flat floor (cached: it never changes)."""
+    global _TINY_WORLD
+    if _TINY_WORLD is None:
+        _TINY_WORLD = build_world(TinyCharacter())
+    return _TINY_WORLD
+
+
+def _unit_quat(shape: tuple[int, ...], g: torch.Generator) -> torch.Tensor:
+    q = torch.randn(*shape, 4, generator=g)
+    return q / q.norm(dim=-1, keepdim=True)
+
+
+def _fake_state(layout: Layout, n: int, g: torch.Generator) -> SimState:
+    b, s = layout.num_bodies, len(layout.site_names)
+    qpos = torch.randn(n, layout.nq, generator=g) * 0.3
+    qpos[:, 2] += 0.9
+    qpos[:, 3:7] = _unit_quat((n,), g)
+    body_pos = torch.randn(n, b, 3, generator=g) * 0.3
+    body_pos[..., 2] = body_pos[..., 2].abs() + 0.05
+    return SimState(
+        qpos=qpos,
+        qvel=torch.randn(n, layout.nv, generator=g),
+        body_pos=body_pos,
+        body_quat=_unit_quat((n, b), g),
+        body_linvel=torch.randn(n, b, 3, generator=g),
+        body_angvel=torch.randn(n, b, 3, generator=g),
+        site_pos=torch.randn(n, s, 3, generator=g) * 0.5 + torch.tensor([0.0, 0.0, 1.0]),
+        site_quat=_unit_quat((n, s), g),
+        contact_force=torch.rand(n, b, generator=g) * 200.0,
+    )
+
+
+def fake_context(
+    layout: Layout | None = None,
+    num_envs: int = 4,
+    *,
+    seed: int = 0,
+    window_offsets: tuple[int, ...] = (-2, -1, 0, 1, 2),
+    num_devices: int = 3,
+    scene: Scene | None = None,
+    dt: float = 1 / 36,
+) -> StepContext:
+    """A random but valid step for ``num_envs`` environments of ``layout`` (default: tiny)."""
+    if layout is None:
+        layout = tiny_world().layout
+    g = torch.Generator().manual_seed(seed)
+    w = len(window_offsets)
+    devices = torch.cat(
+        [
+            torch.randn(num_envs, w, num_devices, 3, generator=g) * 0.5
+            + torch.tensor([0.0, 0.0, 1.2]),
+            _unit_quat((num_envs, w, num_devices), g),
+        ],
+        dim=-1,
+    )
+    feet = len(layout.body_groups.get("feet", ()))
+    ref = ReferenceBatch(
+        pose=_fake_state(layout, num_envs, g),
+        devices=devices,
+        window_offsets=window_offsets,
+        contacts=torch.rand(num_envs, feet, generator=g) > 0.5,
+    )
+    return StepContext(
+        layout=layout,
+        sim=_fake_state(layout, num_envs, g),
+        ref=ref,
+        action=torch.rand(num_envs, layout.nu, generator=g) * 2 - 1,
+        prev_action=torch.rand(num_envs, layout.nu, generator=g) * 2 - 1,
+        episode_step=torch.randint(0, 400, (num_envs,), generator=g),
+        dt=dt,
+        scene=scene if scene is not None else FlatScene(),
+    )
+
+
+class FakeVecEnv:
+    """A tiny linear-dynamics vector environment for algorithm checks (no physics).
+
+    Reward is higher the closer the action is to a fixed linear function of the observation,
+    so a working learner has a real signal; episodes end every ``horizon`` steps.
+    """
+
+    def __init__(
+        self,
+        num_envs: int = 4,
+        obs_dims: Mapping[str, int] | None = None,
+        action_dim: int = 3,
+        horizon: int = 16,
+        seed: int = 0,
+    ) -> None:
+        self.num_envs = num_envs
+        self.obs_dims = dict(obs_dims or {"actor": 5, "critic": 8})
+        self.action_dim = action_dim
+        self.horizon = horizon
+        self._g = torch.Generator().manual_seed(seed)
+        self._target = torch.randn(self.obs_dims["actor"], action_dim, generator=self._g) * 0.3
+        self._t = torch.zeros(num_envs, dtype=torch.long)
+        self._obs = self._draw()
+
+    def _draw(self) -> dict[str, torch.Tensor]:
+        return {
+            k: torch.randn(self.num_envs, d, generator=self._g) for k, d in self.obs_dims.items()
+        }
+
+    def reset(self) -> dict[str, torch.Tensor]:
+        self._t.zero_()
+        self._obs = self._draw()
+        return self._obs
+
+    def step(self, action: torch.Tensor):
+        want = self._obs["actor"] @ self._target
+        reward = torch.exp(-(action - want).square().sum(-1))
+        self._t += 1
+        truncated = self._t >= self.horizon
+        terminated = torch.zeros_like(truncated)
+        self._t[truncated] = 0
+        self._obs = self._draw()
+        return self._obs, reward.float(), terminated, truncated, {}

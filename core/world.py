@@ -1,0 +1,116 @@
+"""Compose a character and a scene into one MuJoCo model, and describe it as a :class:`Layout`.
+
+The character's spec is the world: the scene adds its floor and props to it, so names stay
+unprefixed and role sites resolve by their plain names. Without a scene a plain floor is added.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from retarget.errors import PluginError
+from retarget.kinds import REQUIRED_GROUPS, REQUIRED_SITES, Character, Scene
+from retarget.state import Layout
+
+
+@dataclass(frozen=True)
+class World:
+    """A compiled model plus the layout plugins bind to."""
+
+    model: mujoco.MjModel
+    layout: Layout
+    spec: mujoco.MjSpec
+
+
+def add_floor(spec: mujoco.MjSpec, size: float = 50.0) -> None:
+    """A plane at z = 0 that collides with everything (contype/conaffinity 1)."""
+    spec.worldbody.add_geom(
+        name="floor",
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        size=[size, size, 0.1],
+        contype=1,
+        conaffinity=1,
+        rgba=[0.8, 0.8, 0.8, 1.0],
+    )
+
+
+def _fail(character: Character, message: str) -> PluginError:
+    return PluginError(message, plugin=f"character {character.name}")
+
+
+def build_world(character: Character, scene: Scene | None = None) -> World:
+    """Build and compile character + scene; errors name the plugin that caused them."""
+    spec = character.build_spec()
+    body_names = tuple(b.name for b in spec.bodies if b.name and b.name != "world")
+    if scene is None:
+        add_floor(spec)
+    else:
+        try:
+            scene.build(spec)
+        except Exception as exc:
+            raise PluginError(f"build failed: {exc}", plugin=f"scene {scene.name}") from exc
+    try:
+        model = spec.compile()
+    except Exception as exc:
+        raise _fail(character, f"MJCF does not compile: {exc}") from exc
+    return World(model=model, layout=layout_of(character, model, body_names), spec=spec)
+
+
+def layout_of(character: Character, model: mujoco.MjModel, body_names: tuple[str, ...]) -> Layout:
+    """Names and index groups of the character inside ``model``."""
+
+    def name(obj: int, i: int) -> str:
+        return mujoco.mj_id2name(model, obj, i) or ""
+
+    if model.njnt == 0 or model.jnt_type[0] != mujoco.mjtJoint.mjJNT_FREE:
+        raise _fail(character, "the first joint must be the root's free joint")
+    joints = tuple(
+        name(mujoco.mjtObj.mjOBJ_JOINT, j)
+        for j in range(1, model.njnt)
+        if model.jnt_bodyid[j] != 0
+        and name(mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j]) in body_names
+    )
+    actuators = tuple(name(mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(model.nu))
+    roles = dict(character.site_roles())
+    missing = [r for r in REQUIRED_SITES if r not in roles]
+    if missing:
+        raise _fail(character, f"site_roles() lacks required roles: {', '.join(missing)}")
+    for role, site in roles.items():
+        if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, site) < 0:
+            raise _fail(character, f"role '{role}' names site '{site}', which does not exist")
+    groups: dict[str, tuple[int, ...]] = {}
+    for group, members in character.body_groups().items():
+        idx = []
+        for body in members:
+            if body not in body_names:
+                raise _fail(character, f"body group '{group}' names unknown body '{body}'")
+            idx.append(body_names.index(body))
+        groups[group] = tuple(idx)
+    missing = [g for g in REQUIRED_GROUPS if g not in groups]
+    if missing:
+        raise _fail(character, f"body_groups() lacks required groups: {', '.join(missing)}")
+    weights = character.joint_weights()
+    unknown = sorted(set(weights) - set(joints))
+    if unknown:
+        raise _fail(character, f"joint_weights() names unknown joints: {', '.join(unknown)}")
+    passive = tuple(character.passive_joints())
+    gear = np.asarray(model.actuator_gear[:, 0], dtype=float)
+    return Layout(
+        body_names=body_names,
+        body_ids=tuple(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in body_names),
+        joint_names=joints,
+        actuator_names=actuators,
+        site_names=tuple(roles),
+        site_ids=tuple(
+            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, s) for s in roles.values()
+        ),
+        body_groups=groups,
+        nq=model.nq,
+        nv=model.nv,
+        joint_weights=tuple(float(weights.get(j, 1.0)) for j in joints),
+        torque_limits=tuple(float(g) for g in gear),
+        passive_joints=passive,
+    )
