@@ -11,6 +11,8 @@ from retarget.kinds.base import Plugin
 if TYPE_CHECKING:
     import mujoco
 
+    from retarget.joint_map import JointMap
+
 REQUIRED_SITES: tuple[str, ...] = ("head", "left_hand", "right_hand", "root")
 """Role sites every character provides: the headset mount, controller mounts and the root."""
 
@@ -50,3 +52,11 @@ class Character(Plugin):
     def joint_weights(self) -> Mapping[str, float]:
         """Per-joint reward weights (missing joints weigh 1.0)."""
         return {}
+
+    def joint_map(self) -> JointMap | None:
+        """How human joints drive this character's joints in kinematic retargeting.
+
+        ``None`` (the default) means the character cannot be retargeted kinematically; see
+        :mod:`retarget.joint_map`.
+        """
+        return None

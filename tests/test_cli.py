@@ -1,0 +1,97 @@
+"""The ``retarget`` command: listing, showing, recipes, and commands added by plugins."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+from retarget.cli.main import main
+
+COMMAND = """
+import retarget
+
+class Hello(retarget.Command):
+    '''Says hello (a command added by a plugin).'''
+    name = "hello"
+
+    def add_arguments(self, parser):
+        parser.add_argument("who")
+
+    def run(self, args):
+        print(f"hello {args.who}")
+        if args.who == "error":
+            raise retarget.RecipeError("bad who", field="who")
+        return 0
+
+@retarget.hookimpl
+def register_commands(register):
+    register(Hello)
+"""
+
+TINY = """
+import retarget
+from retarget.testing.fakes import TinyCharacter
+
+@retarget.hookimpl
+def register_characters(register):
+    register(TinyCharacter)
+"""
+
+
+def test_plugins_table_and_json(capsys) -> None:
+    assert main(["plugins"]) == 0
+    out = capsys.readouterr().out
+    assert "action_diff" in out and "retarget" in out
+    assert main(["plugins", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    row = next(r for r in rows if r["name"] == "episode_cap")
+    assert row["kind"] == "termination" and row["distribution"] == "retarget"
+
+
+def test_plugins_show_prints_doc_and_fields(capsys) -> None:
+    assert main(["plugins", "show", "termination", "episode_cap"]) == 0
+    out = capsys.readouterr().out
+    assert "max_steps" in out and "300" in out and "Ends an episode" in out
+    assert main(["plugins", "show", "reward", "action_dif"]) == 2
+    assert "did you mean 'action_diff'" in capsys.readouterr().err
+
+
+def test_plugin_command_is_added(make_dist, capsys) -> None:
+    make_dist("retarget-hello", {"hello": COMMAND})
+    assert main(["hello", "world"]) == 0
+    assert "hello world" in capsys.readouterr().out
+    assert main(["hello", "error"]) == 2
+    assert "field 'who'" in capsys.readouterr().err
+
+
+def test_recipe_verbs(make_dist, tmp_path, capsys) -> None:
+    make_dist("retarget-tiny", {"tiny": TINY})
+    recipe = tmp_path / "r.yaml"
+    recipe.write_text("character: tiny\nrewards:\n  action_min: {k: 0.2}\n")
+    assert main(["recipe", "validate", str(recipe)]) == 0
+    assert main(["recipe", "show", str(recipe), "--set", "seed=5", "--format", "json"]) == 0
+    out = capsys.readouterr().out
+    data = json.loads(out[out.index("{") :])
+    assert data["seed"] == 5 and data["rewards"]["action_min"] == {
+        "type": "action_min",
+        "weight": 0.1,
+        "k": 0.2,
+    }
+    assert main(["recipe", "schema"]) == 0
+    schema = json.loads(capsys.readouterr().out)
+    assert "character_component" in schema["$defs"]
+    recipe.write_text("character: tiny\nrewards:\n  action_min: {kk: 0.2}\n")
+    assert main(["recipe", "validate", str(recipe)]) == 2
+    err = capsys.readouterr().err
+    assert str(recipe) in err and "rewards.action_min.kk" in err and "Traceback" not in err
+
+
+def test_console_script_runs() -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "retarget.cli.main", "--version"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 0 and "retarget" in result.stdout

@@ -1,0 +1,120 @@
+"""Installed plugins load in isolation: broken ones warn (or fail in strict mode), never crash."""
+
+from __future__ import annotations
+
+import pytest
+
+from retarget.cli.main import main
+from retarget.errors import PluginError
+from retarget.loader import PluginLoadWarning, load_plugins
+
+GOOD = """
+import retarget
+from retarget.plugins.rewards.action import ActionMin
+
+class Calm(ActionMin):
+    '''Rewards calm actions.'''
+    name = "calm"
+
+@retarget.hookimpl
+def register_rewards(register):
+    register(Calm)
+"""
+
+IMPORT_ERROR = "import retarget\nimport does_not_exist_anywhere\n"
+
+RAISES = """
+import retarget
+
+@retarget.hookimpl
+def register_rewards(register):
+    raise RuntimeError("boom inside the hook")
+"""
+
+UNKNOWN_HOOK = """
+import retarget
+
+@retarget.hookimpl
+def register_robots(register):
+    pass
+"""
+
+DUPLICATE = """
+import retarget
+from retarget.plugins.rewards.action import ActionMin
+
+class Again(ActionMin):
+    '''Same name as a built-in.'''
+    name = "action_min"
+
+@retarget.hookimpl
+def register_rewards(register):
+    register(Again)
+"""
+
+NOT_A_PLUGIN = """
+import retarget
+
+@retarget.hookimpl
+def register_rewards(register):
+    register(dict, name="dicty")
+"""
+
+
+def test_good_third_party_plugin_is_attributed(make_dist) -> None:
+    make_dist("retarget-calm", {"calm": GOOD}, version="2.3")
+    entry = load_plugins(strict=True).get("reward", "calm")
+    assert (entry.distribution, entry.version, entry.plugin) == ("retarget-calm", "2.3", "calm")
+
+
+@pytest.mark.parametrize(
+    ("source", "needle"),
+    [
+        (IMPORT_ERROR, "failed to import"),
+        (RAISES, "boom inside the hook"),
+        (UNKNOWN_HOOK, "unknown hook"),
+        (NOT_A_PLUGIN, "not a subclass"),
+    ],
+    ids=["import-error", "raises-in-hook", "unknown-hook", "not-a-plugin"],
+)
+def test_broken_plugin_warns_and_the_rest_loads(make_dist, source, needle) -> None:
+    make_dist("retarget-broken", {"broken": source, "calm": GOOD})
+    with pytest.warns(PluginLoadWarning, match=needle) as caught:
+        registry = load_plugins(strict=False)
+    assert any("retarget-broken" in str(w.message) for w in caught)
+    assert "calm" in registry.names("reward")
+    assert "action_diff" in registry.names("reward")
+    with pytest.raises(PluginError, match=needle):
+        load_plugins(strict=True)
+
+
+def test_broken_plugin_leaves_cli_working_and_strict_fails(make_dist, capsys, monkeypatch) -> None:
+    make_dist("retarget-broken", {"broken": RAISES})
+    assert main(["plugins"]) == 0
+    captured = capsys.readouterr()
+    assert "action_diff" in captured.out
+    assert "warning:" in captured.err and "retarget-broken" in captured.err
+    assert "boom inside the hook" in captured.err
+    assert main(["--strict-plugins", "plugins"]) == 2
+    err = capsys.readouterr().err
+    assert "error:" in err and "broken" in err and "Traceback" not in err
+    monkeypatch.setenv("RETARGET_STRICT_PLUGINS", "1")
+    assert main(["plugins"]) == 2
+
+
+def test_duplicate_names_are_an_error_naming_both(make_dist) -> None:
+    make_dist("retarget-dupe", {"dupe": DUPLICATE})
+    with pytest.raises(PluginError) as info:
+        load_plugins(strict=False)
+    text = info.value.format()
+    assert "duplicate reward name 'action_min'" in text
+    assert "retarget-dupe" in text and "retarget 0.1.0" in text
+
+
+def test_allowlist_limits_third_party_distributions(make_dist, monkeypatch) -> None:
+    make_dist("retarget-calm", {"calm": GOOD})
+    monkeypatch.setenv("RETARGET_LOAD_PLUGINS", "")
+    names = load_plugins(strict=True).names("reward")
+    assert "calm" not in names and "action_diff" in names
+    monkeypatch.setenv("RETARGET_LOAD_PLUGINS", "retarget-calm")
+    assert "calm" in load_plugins(strict=True).names("reward")

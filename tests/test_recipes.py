@@ -1,0 +1,186 @@
+"""Recipe loading: each kind of mistake gives one message naming file, line, field and plugin."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+
+import retarget
+from retarget.errors import RecipeError
+from retarget.loader import load_plugins
+from retarget.recipe import load, parse_text, recipe_schema, resolve, write_lock
+from retarget.registry import Registry
+from retarget.testing.fakes import TinyCharacter
+
+
+class TinyPlugins:
+    @retarget.hookimpl
+    def register_characters(self, register) -> None:
+        register(TinyCharacter)
+
+
+@pytest.fixture(scope="module")
+def registry() -> Registry:
+    return load_plugins(strict=True, modules={"tiny_plugins": TinyPlugins()})
+
+
+GOOD = """\
+name: demo
+character: tiny
+rewards:
+  action_diff: {weight: 0.2}
+  smooth: {type: action_min, k: 0.3}
+terminations:
+  episode_cap: {max_steps: 100}
+"""
+
+
+def write(tmp_path: Path, text: str, name: str = "recipe.yaml") -> Path:
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def error_of(path: Path, registry: Registry, **kwargs) -> RecipeError:
+    with pytest.raises(RecipeError) as info:
+        load(path, registry, **kwargs)
+    return info.value
+
+
+def test_good_recipe_resolves_with_defaults_filled(tmp_path: Path, registry: Registry) -> None:
+    resolved = load(write(tmp_path, GOOD), registry)
+    data = resolved.to_dict()
+    assert data["rewards"]["action_diff"] == {"type": "action_diff", "weight": 0.2, "k": 0.5}
+    assert data["rewards"]["smooth"]["type"] == "action_min"
+    assert resolved.component("terminations.episode_cap").config.max_steps == 100
+
+
+def test_typo_field_names_file_line_field_plugin_and_suggests(
+    tmp_path: Path, registry: Registry
+) -> None:
+    path = write(tmp_path, GOOD.replace("{weight: 0.2}", "{wieght: 0.2}"))
+    err = error_of(path, registry)
+    assert err.file == str(path) and err.line == 4
+    assert err.field == "rewards.action_diff.wieght"
+    assert "action_diff" in (err.plugin or "")
+    assert "did you mean 'weight'" in (err.hint or "")
+    assert str(path) in err.format() and "wieght" in err.format()
+
+
+def test_typo_in_structure_suggests_close_field(tmp_path: Path, registry: Registry) -> None:
+    err = error_of(write(tmp_path, GOOD.replace("rewards:", "reward:")), registry)
+    assert err.field == "reward" and err.line == 3
+    assert "did you mean 'rewards'" in (err.hint or "")
+
+
+def test_wrong_type_names_field_and_value(tmp_path: Path, registry: Registry) -> None:
+    err = error_of(write(tmp_path, GOOD.replace("max_steps: 100", "max_steps: lots")), registry)
+    assert err.field == "terminations.episode_cap.max_steps" and err.line == 7
+    assert "'lots'" in err.message
+
+
+def test_unknown_plugin_lists_choices(tmp_path: Path, registry: Registry) -> None:
+    err = error_of(write(tmp_path, GOOD.replace("type: action_min", "type: action_mni")), registry)
+    assert err.field == "rewards.smooth.type" and err.line == 5
+    assert "unknown reward 'action_mni'" in err.message
+    assert "did you mean 'action_min'" in (err.hint or "")
+
+
+def test_bad_yaml_reports_line(tmp_path: Path, registry: Registry) -> None:
+    err = error_of(write(tmp_path, GOOD.replace("{max_steps: 100}", "{max_steps: 100")), registry)
+    assert err.file is not None and err.line is not None and err.line >= 7
+    assert "invalid YAML" in err.message
+
+
+def test_missing_file(tmp_path: Path, registry: Registry) -> None:
+    err = error_of(tmp_path / "nope.yaml", registry)
+    assert err.file == str(tmp_path / "nope.yaml") and "not found" in err.message
+
+
+@pytest.mark.parametrize(
+    ("text", "needle"),
+    [("", "empty"), ("- a\n- b\n", "mapping"), ("character: tiny\nseed: x\n", "seed")],
+)
+def test_other_shapes_of_bad_input(tmp_path: Path, registry: Registry, text, needle) -> None:
+    err = error_of(write(tmp_path, text), registry)
+    assert needle in err.format()
+
+
+def test_toml_recipe(tmp_path: Path, registry: Registry) -> None:
+    text = 'character = "tiny"\nseed = 3\n[rewards.action_diff]\nweight = 0.5\n'
+    resolved = load(write(tmp_path, text, "r.toml"), registry)
+    assert resolved.recipe.seed == 3
+    assert resolved.component("rewards.action_diff").config.weight == 0.5
+    err = error_of(write(tmp_path, "character = \n", "bad.toml"), registry)
+    assert "invalid TOML" in err.message and err.file.endswith("bad.toml")
+
+
+def test_overrides_and_shorthands(tmp_path: Path, registry: Registry) -> None:
+    path = write(tmp_path, GOOD)
+    resolved = load(
+        path,
+        registry,
+        shorthands={"seed": "7", "character": "tiny"},
+        assignments=["rewards.action_diff.k=2.5", "terminations.episode_cap.max_steps=9"],
+    )
+    assert resolved.recipe.seed == 7
+    assert resolved.component("rewards.action_diff").config.k == 2.5
+    assert resolved.component("terminations.episode_cap").config.max_steps == 9
+
+
+def test_override_error_points_at_the_flag(tmp_path: Path, registry: Registry) -> None:
+    err = error_of(write(tmp_path, GOOD), registry, assignments=["rewards.action_diff.kk=1"])
+    assert err.file == "command line (--set rewards.action_diff.kk=1)"
+    assert err.field == "rewards.action_diff.kk"
+    err = error_of(write(tmp_path, GOOD), registry, shorthands={"character": "dinoo"})
+    assert "--character dinoo" in (err.file or "") and "unknown character" in err.message
+    with pytest.raises(RecipeError, match="PATH=VALUE"):
+        load(write(tmp_path, GOOD), registry, assignments=["novalue"])
+
+
+def test_lock_file_round_trips(tmp_path: Path, registry: Registry) -> None:
+    resolved = load(write(tmp_path, GOOD), registry, assignments=["seed=4"])
+    lock = write_lock(resolved, tmp_path / "run")
+    data = yaml.safe_load(lock.read_text())
+    assert data["_lock"]["plugins"]["character"]["distribution"] == "local"
+    assert data["_lock"]["overrides"] == {"seed": "--set seed=4"}
+    data.pop("_lock")
+    again = resolve(parse_text(yaml.safe_dump(data), "lock", ".yaml"), registry)
+    assert again.to_dict() == resolved.to_dict()
+
+
+def test_schema_lists_plugins_and_config_fields(registry: Registry) -> None:
+    schema = recipe_schema(registry)
+    branches = schema["$defs"]["reward_component"]["oneOf"]
+    names = {b["properties"]["type"]["const"] for b in branches if "properties" in b}
+    assert {"action_diff", "action_min"} <= names
+    diff = next(
+        b for b in branches if b.get("properties", {}).get("type") == {"const": "action_diff"}
+    )
+    assert set(diff["properties"]) == {"type", "weight", "k"}
+    assert diff["additionalProperties"] is False
+    assert schema["properties"]["rewards"]["additionalProperties"]["$ref"].endswith(
+        "reward_component"
+    )
+
+
+def test_missing_requirement_is_caught_before_building(tmp_path: Path) -> None:
+    class NeedsTail(retarget.RewardTerm):
+        """Needs a site the tiny character lacks."""
+
+        name = "needs_tail"
+        requires = ("site:tail_tip",)
+
+        def compute(self, ctx):
+            return ctx.action.sum(-1)
+
+    class Plugins:
+        @retarget.hookimpl
+        def register_rewards(self, register) -> None:
+            register(NeedsTail)
+
+    reg = load_plugins(strict=True, modules={"tiny": TinyPlugins(), "tail": Plugins()})
+    err = error_of(write(tmp_path, "character: tiny\nrewards:\n  needs_tail: {}\n"), reg)
+    assert err.field == "rewards.needs_tail" and "site:tail_tip" in err.message
