@@ -42,3 +42,9 @@ def test_builtins_use_only_the_public_api() -> None:
         if "from retarget._" in text or "import retarget._" in text:
             offenders.append(str(path.relative_to(REPO)))
     assert not offenders, offenders
+
+
+def test_ci_runs_the_readme_test_command() -> None:
+    readme = (REPO / "README.md").read_text()
+    ci = (REPO / ".ci" / "run").read_text().strip().splitlines()
+    assert ci[-1] in readme, f"README must show the test command CI runs: {ci[-1]!r}"

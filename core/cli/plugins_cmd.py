@@ -41,8 +41,9 @@ def run_list(args: argparse.Namespace, registry: Registry) -> int:
         out.print_json(json.dumps(rows))
         return 0
     table = Table(title="retarget plugins", show_lines=False)
-    for col in ("kind", "name", "distribution", "version", "summary"):
-        table.add_column(col, overflow="fold")
+    for col in ("kind", "name", "distribution", "version"):
+        table.add_column(col, no_wrap=True)
+    table.add_column("summary", overflow="fold", ratio=1)
     for e in registry:
         label = e.name + (f" ({', '.join(e.aliases)})" if e.aliases else "")
         table.add_row(e.kind, label, e.distribution, e.version, escape(e.cls.summary()))
