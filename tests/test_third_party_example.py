@@ -17,7 +17,7 @@ EXAMPLE = REPO / "examples" / "third_party_plugin"
 INSTALL_HINT = f"install it first: pip install -e {EXAMPLE.relative_to(REPO)}"
 
 
-def test_example_is_installed_and_listed(capsys) -> None:  # noqa: ANN001
+def test_example_is_installed_and_listed(capsys) -> None:
     assert importlib.util.find_spec("retarget_head_height") is not None, INSTALL_HINT
     assert main(["plugins", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import math
 
+from retarget_head_height import HeadHeight
+
 from retarget.loader import load_plugins
 from retarget.testing import parametrize_with_checks
-from retarget_head_height import HeadHeight
 
 
 @parametrize_with_checks([HeadHeight, HeadHeight(HeadHeight.Config(k=5.0))])
-def test_contract(plugin, check) -> None:  # noqa: ANN001
+def test_contract(plugin, check) -> None:
     check(plugin)
 
 
@@ -19,7 +20,7 @@ def test_plugin_is_installed() -> None:
     assert entry.cls is HeadHeight and entry.distribution == "retarget-head-height"
 
 
-def test_value_by_hand(fake_ctx) -> None:  # noqa: ANN001 - fixture from retarget's pytest plugin
+def test_value_by_hand(fake_ctx) -> None:
     ctx = fake_ctx(num_envs=3, seed=1)
     term = HeadHeight(HeadHeight.Config(k=2.0))
     term.bind(ctx.layout)

@@ -38,5 +38,5 @@ class HeadHeight(retarget.RewardTerm):
 
 
 @retarget.hookimpl
-def register_rewards(register) -> None:  # noqa: ANN001
+def register_rewards(register) -> None:
     register(HeadHeight)
