@@ -112,7 +112,11 @@ class MotionClip:
 
     @property
     def height(self) -> float:
-        """The subject's standing height implied by its bone lengths, metres."""
+        """The subject's standing height implied by its bone lengths, metres.
+
+        Uses bone lengths only (not the clip's foot heights), so every clip of one subject
+        reports the same height.
+        """
         return sk.estimate_height(self.offsets)
 
     def with_(self, **changes: object) -> MotionClip:

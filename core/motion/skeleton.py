@@ -95,7 +95,7 @@ _REST_OFFSETS_175: dict[str, tuple[float, float, float]] = {
     "spine": (0.0, 0.0, 0.10),
     "spine1": (0.0, 0.0, 0.12),
     "spine2": (0.0, 0.0, 0.12),
-    "neck": (0.0, 0.0, 0.20),
+    "neck": (0.0, 0.0, 0.18),
     "head": (0.0, 0.0, 0.10),
     "left_collar": (0.0, 0.03, 0.14),
     "left_shoulder": (0.0, 0.14, 0.0),
@@ -109,8 +109,9 @@ _REST_OFFSETS_175: dict[str, tuple[float, float, float]] = {
 
 ANKLE_HEIGHT_175 = 0.07
 """Ankle joint above the floor when standing (the sole is below the ankle)."""
-HEAD_TOP_175 = 0.15
-"""Crown of the head above the head joint (the head joint sits at the skull base)."""
+HEAD_TOP_175 = 0.17
+"""Crown of the head above the head joint (the head joint sits at the skull base, ~0.9 of
+stature, where mocap skeletons put their head joint)."""
 
 LEFT_RIGHT: tuple[int, ...] = tuple(
     JOINT_NAMES.index(
@@ -160,14 +161,18 @@ def standing_pelvis_height(offsets: np.ndarray) -> float:
     return float(-min(pos[FEET[0], 2], pos[FEET[1], 2]) + ANKLE_HEIGHT_175 * scale)
 
 
-def estimate_height(offsets: np.ndarray) -> float:
+def estimate_height(offsets: np.ndarray, ankle_height: float | None = None) -> float:
     """Standing height (floor to crown) implied by a subject's bone offsets.
 
-    Measured ankle-to-head-joint in the T-pose, then extended by the average adult's ankle
-    height and skull height in proportion, since no source marks the sole or the crown.
+    Measured from the ankle to the head joint in the T-pose, plus the ankle's height above the
+    floor (measured on the clip when known, else the average adult's in proportion), then
+    divided by the head joint's share of stature in the reference proportions (no source marks
+    the crown of the head).
     """
     pos = tpose_positions(offsets)
     span = pos[joint_index("head"), 2] - min(pos[FEET[0], 2], pos[FEET[1], 2])
     ref = tpose_positions(rest_offsets())
     ref_span = ref[joint_index("head"), 2] - ref[FEET[0], 2]
-    return float(span * REFERENCE_HEIGHT / ref_span)
+    if ankle_height is None:
+        ankle_height = ANKLE_HEIGHT_175 * span / ref_span
+    return float((span + ankle_height) * REFERENCE_HEIGHT / (ref_span + ANKLE_HEIGHT_175))
