@@ -20,6 +20,7 @@ forward kinematics (to float precision where the source allows it). Three steps:
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -81,7 +82,7 @@ def _chain_length(src: SourceMotion, idx: dict[str, int | None]) -> float:
 
     chain = ["pelvis", "spine", "spine1", "spine2", "neck", "head"]
     total = seg("left_hip", "left_knee") + seg("left_knee", "left_ankle")
-    for a, b in zip(chain[:-1], chain[1:], strict=True):
+    for a, b in itertools.pairwise(chain):
         total += seg(a, b)
     return total
 
