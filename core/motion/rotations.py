@@ -197,3 +197,18 @@ def yaw(q: np.ndarray) -> np.ndarray:
     """Heading angle (about +Z) of the rotated +X axis, radians."""
     fwd = apply(q, np.array([1.0, 0.0, 0.0]))
     return np.arctan2(fwd[..., 1], fwd[..., 0])
+
+
+def to_euler(q: np.ndarray, order: str, *, degrees: bool = True) -> np.ndarray:
+    """Intrinsic angles in ``order`` (inverse of :func:`from_euler`, three distinct axes)."""
+    order = order.lower()
+    if len(order) != 3 or len(set(order)) != 3 or any(c not in _AXES for c in order):
+        raise ValueError(f"to_euler needs three distinct axes, got {order!r}")
+    i, j, k = (_AXES[c] for c in order)
+    s = 1.0 if (j - i) % 3 == 1 else -1.0
+    m = to_matrix(q)
+    b = np.arcsin(np.clip(s * m[..., i, k], -1.0, 1.0))
+    a = np.arctan2(-s * m[..., j, k], m[..., k, k])
+    c = np.arctan2(-s * m[..., i, j], m[..., i, i])
+    out = np.stack([a, b, c], axis=-1)
+    return np.rad2deg(out) if degrees else out

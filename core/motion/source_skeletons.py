@@ -126,7 +126,11 @@ LAFAN1 = _sided(
 )
 """Ubisoft LaFAN1 (22 joints, centimetres, Y up)."""
 
+CANONICAL: dict[str, str | None] = {n: n for n in sk.JOINT_NAMES}
+"""Files written by retarget itself (:mod:`retarget.motion.bvh_write`)."""
+
 KNOWN: dict[str, NameMap] = {
+    "canonical": CANONICAL,
     "cmu_3dsmax": CMU_3DSMAX,
     "cmu_motionbuilder": CMU_MOTIONBUILDER,
     "lafan1": LAFAN1,

@@ -1,0 +1,1 @@
+"""Built-in extra ``retarget`` subcommands contributed through the plugin API."""

@@ -1,0 +1,1 @@
+"""Built-in motion formats (readers of motion files onto the canonical skeleton)."""
