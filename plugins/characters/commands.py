@@ -1,0 +1,1 @@
+"""``retarget character ...``: look at characters and at kinematic retargeting."""
