@@ -137,6 +137,6 @@ class MotionLibrary:
 def window_offsets(seconds: float, fps: float = CONTROL_RATE, *, future: float = 0.0
                    ) -> tuple[int, ...]:
     """Frame offsets covering ``seconds`` of past up to now, plus ``future`` seconds ahead."""
-    past = int(round(seconds * fps))
-    ahead = int(round(future * fps))
+    past = round(seconds * fps)
+    ahead = round(future * fps)
     return tuple(range(-past, ahead + 1))
