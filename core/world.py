@@ -13,6 +13,7 @@ import numpy as np
 
 from retarget.errors import PluginError
 from retarget.kinds import REQUIRED_GROUPS, REQUIRED_SITES, Character, Scene
+from retarget.sim.batched import add_contact_force_sensor
 from retarget.state import Layout
 
 
@@ -52,6 +53,9 @@ def build_world(character: Character, scene: Scene | None = None) -> World:
             scene.build(spec)
         except Exception as exc:
             raise PluginError(f"build failed: {exc}", plugin=f"scene {scene.name}") from exc
+    root_site = dict(character.site_roles()).get("root")
+    if root_site is not None:
+        add_contact_force_sensor(spec, root_site)
     try:
         model = spec.compile()
     except Exception as exc:
