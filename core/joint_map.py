@@ -13,7 +13,10 @@ more, damp Oppy's arm swing) without touching code:
   hinge's own axis, which is right whenever the character is built in the canonical frame
   (X forward, Y left, Z up, world-aligned joint frames at the zero pose);
 * ``scale`` multiplies every angle (``0.25`` to spread one human joint over four spine joints)
-  and ``offset`` (degrees, per hinge) shifts it, e.g. to lean Dino's body forward.
+  and ``offset`` (degrees, per hinge) shifts it, e.g. to lean Dino's body forward;
+* ``bend`` (the bone axis) drives a hinge by the angle the bone bends, for elbows: sources
+  disagree on whether forearm twist sits in the shoulder or the elbow rotation, which moves the
+  Euler flexion angle around but not the bend.
 
 The composed human rotation is decomposed into intrinsic Euler angles about the ``axes``
 sequence (completed with the missing axes, which are dropped), matching how MuJoCo composes the
@@ -46,6 +49,17 @@ class JointLink(BaseModel):
     scale: float = Field(1.0, description="factor applied to every angle")
     offset: tuple[float, ...] | None = Field(
         None, description="degrees added per hinge after scaling (default 0)")
+    bend: str | None = Field(
+        None, description="bone axis (x, y or z) of the human joint: drive the first hinge by "
+                          "the bend angle between the bone before and after the rotation, "
+                          "signed by the first of `axes`; other hinges stay at 0")
+
+    @field_validator("bend")
+    @classmethod
+    def _bend_axis(cls, v: str | None) -> str | None:
+        if v is not None and v.lstrip("+-") not in _AXIS_INDEX:
+            raise ValueError(f"bend must name the bone axis x, y or z, got {v!r}")
+        return v
 
     @field_validator("human", mode="before")
     @classmethod
@@ -156,9 +170,17 @@ class JointMap(BaseModel):
         link = self.links[cname]
         axes = link.axes if link.axes is not None else tuple(hinge_axes)
         signs = np.array([-1.0 if a.startswith("-") else 1.0 for a in axes])
-        bare = [a.lstrip("+-") for a in axes]
-        angles = euler_intrinsic(quat_to_matrix(local_rot), bare)
-        out = angles * signs * link.scale
+        mat = quat_to_matrix(local_rot)
+        if link.bend is not None:
+            # A hinge like the elbow: how far the bone bends, whatever axis the source put the
+            # bend about (sources disagree on where upper-arm twist lives; the bend does not).
+            b = _AXIS_INDEX[link.bend.lstrip("+-")]
+            bend = np.arccos(np.clip(mat[..., b, b], -1.0, 1.0))
+            out = np.zeros((*local_rot.shape[:-1], len(axes)))
+            out[..., 0] = bend * signs[0] * link.scale
+        else:
+            bare = [a.lstrip("+-") for a in axes]
+            out = euler_intrinsic(mat, bare) * signs * link.scale
         if link.offset is not None:
             out = out + np.deg2rad(np.asarray(link.offset))
         return out
@@ -184,3 +206,13 @@ def euler_intrinsic(mat: np.ndarray, axes: Sequence[str]) -> np.ndarray:
     a = np.arctan2(-parity * r[..., j, k], r[..., k, k])
     c = np.arctan2(-parity * r[..., i, j], r[..., i, i])
     return np.stack([a, b, c], axis=-1)[..., : len(axes)]
+
+
+def elbow_link(side: str, scale: float = 1.0, twist: bool = False) -> JointLink:
+    """The usual elbow: a z hinge bending forward (negative for the left arm, whose bone is +y).
+
+    ``twist=True`` for a character elbow with a second (forearm twist) hinge, left at 0.
+    """
+    flex = "-z" if side == "left" else "z"
+    return JointLink(human=(f"{side}_elbow",), bend="y",
+                     axes=(flex, "y") if twist else (flex,), scale=scale)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from retarget.body_builder import BodyBuilder, Box, Capsule, Joint, Sphere, ball, hinge, joint
-from retarget.joint_map import JointLink, JointMap
+from retarget.joint_map import JointLink, JointMap, elbow_link
 from retarget.motion import skeleton as sk
 
 from .common import scaled
@@ -142,7 +142,7 @@ def humanoid_joint_map(toes: bool = True) -> JointMap:
     }
     for side, pre in (("left", "l"), ("right", "r")):
         links[f"{pre}_shoulder"] = JointLink(human=(f"{side}_collar", f"{side}_shoulder"))
-        links[f"{pre}_elbow"] = JointLink(human=(f"{side}_elbow",))
+        links[f"{pre}_elbow"] = elbow_link(side)
         links[f"{pre}_wrist"] = JointLink(human=(f"{side}_wrist",))
         links[f"{pre}_hip"] = JointLink(human=(f"{side}_hip",))
         links[f"{pre}_knee"] = JointLink(human=(f"{side}_knee",))

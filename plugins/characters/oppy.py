@@ -8,7 +8,7 @@ from pydantic import Field
 
 import retarget
 from retarget.body_builder import BodyBuilder, Box, Capsule, Ellipsoid, Sphere, ball, joint
-from retarget.joint_map import JointLink, JointMap
+from retarget.joint_map import JointLink, JointMap, elbow_link
 
 from .common import CharacterConfig, ProceduralCharacter, scaled
 
@@ -125,7 +125,7 @@ class Oppy(ProceduralCharacter):
         }
         for side, pre in (("left", "l"), ("right", "r")):
             links[f"{pre}_shoulder"] = JointLink(human=(f"{side}_collar", f"{side}_shoulder"))
-            links[f"{pre}_elbow"] = JointLink(human=(f"{side}_elbow",))
+            links[f"{pre}_elbow"] = elbow_link(side, twist=True)
             links[f"{pre}_hip"] = JointLink(human=(f"{side}_hip",))
             links[f"{pre}_knee"] = JointLink(human=(f"{side}_knee",))
             links[f"{pre}_ankle"] = JointLink(human=(f"{side}_ankle",))
