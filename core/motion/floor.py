@@ -2,10 +2,10 @@
 
 No source marks the sole, so the foot is modelled by three points per side: the ankle joint
 (heel), the toe joint (ball of the foot) and a toe tip :data:`TOE_TIP` ahead of the toe joint
-along the toe's forward axis (needed for tiptoe steps, where heel and ball are both lifted).
-Each point gets a *clearance*: its typical height when it carries weight (the 5th percentile of
-its height over the clip). The lowest sole point of a frame is ``min_k(z_k - clearance_k)``,
-which is ~0 whenever a foot is planted. The floor is put at the toe tips' clearance.
+(needed for tiptoe steps, where heel and ball are both lifted). Each point gets a *clearance*:
+its typical height when it carries weight (the 5th percentile of its height over the clip).
+The lowest sole point of a frame is ``min_k(z_k - clearance_k)``, which is ~0 whenever a foot
+is planted. The floor is put at the toe tips' clearance.
 """
 
 from __future__ import annotations
@@ -16,8 +16,9 @@ from retarget.motion import rotations as rot
 from retarget.motion import skeleton as sk
 from retarget.motion.clip import MotionClip
 
-TOE_TIP = 0.05
-"""Toe joint (ball of the foot) to toe tip for a 1.75 m adult, metres."""
+TOE_TIP = (0.05, 0.0, -0.02)
+"""Toe joint (ball of the foot) to toe tip in the toe's frame for a 1.75 m adult, metres: with
+the foot flat the toe joint is 2 cm above the ground and the tip touches it."""
 CLEARANCE_PERCENTILE = 5.0
 
 
@@ -26,7 +27,7 @@ def foot_points(clip: MotionClip) -> np.ndarray:
     g = clip.global_pos
     toes = np.array(sk.TOES)
     tip = g[:, toes] + rot.apply(
-        clip.global_rot[:, toes], np.array([TOE_TIP * clip.height / sk.REFERENCE_HEIGHT, 0, 0]))
+        clip.global_rot[:, toes], np.array(TOE_TIP) * clip.height / sk.REFERENCE_HEIGHT)
     return np.stack([g[:, np.array(sk.FEET)], g[:, toes], tip], axis=1)
 
 
