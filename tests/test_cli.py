@@ -75,7 +75,7 @@ def test_recipe_verbs(make_dist, tmp_path, capsys) -> None:
     data = json.loads(out[out.index("{") :])
     assert data["seed"] == 5 and data["rewards"]["action_min"] == {
         "type": "action_min",
-        "weight": 0.1,
+        "weight": 0.5,
         "k": 0.2,
     }
     assert main(["recipe", "schema"]) == 0

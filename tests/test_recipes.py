@@ -52,7 +52,7 @@ def error_of(path: Path, registry: Registry, **kwargs) -> RecipeError:
 def test_good_recipe_resolves_with_defaults_filled(tmp_path: Path, registry: Registry) -> None:
     resolved = load(write(tmp_path, GOOD), registry)
     data = resolved.to_dict()
-    assert data["rewards"]["action_diff"] == {"type": "action_diff", "weight": 0.2, "k": 0.5}
+    assert data["rewards"]["action_diff"] == {"type": "action_diff", "weight": 0.2, "k": 10.0}
     assert data["rewards"]["smooth"]["type"] == "action_min"
     assert resolved.component("terminations.episode_cap").config.max_steps == 100
 

@@ -1,0 +1,141 @@
+"""Headset and controller sensors: what a VR user's devices report, as the policy sees it.
+
+The reference carries device poses over a time window (``ref.devices`` ``(N, W, D, 7)``:
+headset, left, right controller; position + ``wxyz``; ``ref.window_offsets`` the frame offset of
+each of the W entries, 0 being now). A sensor picks the frames ``-past .. +future`` from it and
+expresses them in the *simulated* character's heading frame (:mod:`retarget.heading`): rotated
+by the inverse of the root's yaw and moved to the root's ground projection, heights kept as
+world heights. Orientations are given as 6D rotations. The layout of one observation is
+frame-major: for each frame (oldest first), each device's position then its 6D rotation.
+
+Future frames exist only offline; a policy meant to run live uses ``future: 0`` (QuestEnvSim
+reports the loss of 1 s of future as a moderate drop in success rate).
+"""
+
+from __future__ import annotations
+
+import torch
+from pydantic import Field
+
+import retarget
+from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
+from retarget.heading import quat_normalize, quat_to_6d, to_heading_points, to_heading_quats
+
+HEADSET, LEFT, RIGHT = 0, 1, 2
+"""Device order along the ``D`` axis of ``ref.devices``."""
+
+
+class HmdConfig(PluginConfig):
+    past: int = Field(0, ge=0, description="past frames before the current one")
+    future: int = Field(0, ge=0, description="future frames after the current one (offline only)")
+    keep_height: bool = Field(
+        True, description="positions keep world height; false makes them relative to the root"
+    )
+
+
+class ThreePointConfig(HmdConfig):
+    controller_rotation: bool = Field(
+        True, description="include controller orientations; false = positions only (QuestEnvSim)"
+    )
+
+
+class _DeviceSensor(Sensor):
+    """Window selection and heading-frame transform shared by the device sensors."""
+
+    def __init__(self, config: PluginConfig | None = None) -> None:
+        super().__init__(config)
+        self._window_cache: tuple[tuple[int, ...], torch.Tensor] | None = None
+
+    @property
+    def frames(self) -> int:
+        return self.config.past + 1 + self.config.future
+
+    def _features_per_frame(self) -> int:
+        raise NotImplementedError
+
+    def spec(self, layout: Layout) -> ObsSpec:
+        return ObsSpec((self.frames * self._features_per_frame(),))
+
+    def _window(self, offsets: tuple[int, ...]) -> torch.Tensor:
+        """Indices into the W axis for offsets ``-past .. future`` (cached per offsets tuple)."""
+        if self._window_cache is not None and self._window_cache[0] == offsets:
+            return self._window_cache[1]
+        wanted = range(-self.config.past, self.config.future + 1)
+        missing = [o for o in wanted if o not in offsets]
+        if missing:
+            raise PluginError(
+                f"the reference window {list(offsets)} lacks frame offsets {missing} needed for "
+                f"past={self.config.past}, future={self.config.future}",
+                plugin=self.name,
+                hint="widen the environment's device window or lower past/future",
+            )
+        idx = torch.tensor([offsets.index(o) for o in wanted], dtype=torch.long)
+        self._window_cache = (offsets, idx)
+        return idx
+
+    def _devices(self, ctx: StepContext, devices: list[int]) -> tuple[torch.Tensor, torch.Tensor]:
+        """Positions ``(N, F, d, 3)`` and 6D rotations ``(N, F, d, 6)`` in the heading frame."""
+        if ctx.ref.devices.shape[2] <= max(devices):
+            raise PluginError(
+                f"needs devices {devices} but the reference has {ctx.ref.devices.shape[2]}",
+                plugin=self.name,
+            )
+        window = self._window(tuple(ctx.ref.window_offsets))
+        dev = ctx.ref.devices[:, window][:, :, devices]
+        root_pos, root_quat = ctx.sim.qpos[:, :3], ctx.sim.qpos[:, 3:7]
+        pos = to_heading_points(
+            dev[..., :3], root_pos, root_quat, keep_height=self.config.keep_height
+        )
+        rot = quat_to_6d(to_heading_quats(quat_normalize(dev[..., 3:7]), root_quat))
+        return pos, rot
+
+
+class Hmd(_DeviceSensor):
+    """Headset only: position (3) and 6D orientation (6) per frame, in the heading frame.
+
+    The 1-point setting of QuestEnvSim: enough for plausible whole-body motion, with the arms
+    left to the policy.
+    """
+
+    name = "hmd"
+    Config = HmdConfig
+    requires = ("site:head",)
+
+    def _features_per_frame(self) -> int:
+        return 9
+
+    def observe(self, ctx: StepContext) -> torch.Tensor:
+        pos, rot = self._devices(ctx, [HEADSET])
+        return torch.cat([pos, rot], dim=-1).reshape(ctx.num_envs, -1).float()
+
+
+class ThreePoint(_DeviceSensor):
+    """Headset pose and both controllers, per frame, in the character's heading frame.
+
+    Per frame: headset position (3) + 6D orientation (6), then left and right controller
+    position (3 each) + 6D orientation (6 each) when ``controller_rotation`` (27 values), or
+    positions only (15 values), QuestEnvSim's choice since controller orientation depends on how
+    a user holds them.
+    """
+
+    name = "three_point"
+    Config = ThreePointConfig
+    requires = ("site:head", "site:left_hand", "site:right_hand")
+
+    def _features_per_frame(self) -> int:
+        return 27 if self.config.controller_rotation else 15
+
+    def observe(self, ctx: StepContext) -> torch.Tensor:
+        pos, rot = self._devices(ctx, [HEADSET, LEFT, RIGHT])
+        if self.config.controller_rotation:
+            per_device = torch.cat([pos, rot], dim=-1)  # (N, F, 3, 9)
+        else:
+            hmd = torch.cat([pos[:, :, :1], rot[:, :, :1]], dim=-1).flatten(2)  # (N, F, 9)
+            per_device = torch.cat([hmd, pos[:, :, 1:].flatten(2)], dim=-1)  # (N, F, 15)
+        return per_device.reshape(ctx.num_envs, -1).float()
+
+
+@retarget.hookimpl
+def register_sensors(register) -> None:
+    register(Hmd)
+    register(ThreePoint)
