@@ -1,0 +1,84 @@
+"""Where motion data comes from: a path the user gives, ``RETARGET_DATA``, or the default set.
+
+Real datasets are never shipped with the project (licences, size): users point at them with
+``--motions DIR``, a recipe field, or the ``RETARGET_DATA`` environment variable (a directory
+holding motion files, searched recursively). With none of these, the generated default set
+(:mod:`retarget.motion.procedural`) is used.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+
+from retarget.errors import MotionError
+from retarget.kinds import MotionFormat
+from retarget.motion.clip import MotionClip
+
+ENV_VAR = "RETARGET_DATA"
+
+
+def resolve_motion_source(
+    path: str | Path | None, suffixes: Iterable[str] = (".bvh",)
+) -> list[Path] | None:
+    """Motion files to read, or ``None`` for the generated default set.
+
+    ``path`` (a file or a directory) wins; else ``$RETARGET_DATA``; else ``None``. A path that
+    does not exist, or a directory without any motion file, is a :class:`MotionError`.
+    """
+    origin = "argument"
+    if path is None or str(path) == "":
+        env = os.environ.get(ENV_VAR, "").strip()
+        if not env:
+            return None
+        path, origin = env, f"${ENV_VAR}"
+    p = Path(path).expanduser()
+    wanted = tuple(s.lower() for s in suffixes)
+    if p.is_file():
+        return [p]
+    if not p.exists():
+        raise MotionError(f"motion path does not exist ({origin})", file=p)
+    files = sorted(f for f in p.rglob("*") if f.is_file() and f.suffix.lower() in wanted)
+    if not files:
+        raise MotionError(f"no motion files ({', '.join(wanted)}) under this directory "
+                          f"({origin})", file=p)
+    return files
+
+
+def reader_for(path: Path, formats: Mapping[str, MotionFormat]) -> MotionFormat:
+    """The motion format whose suffixes match ``path``; the error lists the known suffixes."""
+    suffix = path.suffix.lower()
+    for fmt in formats.values():
+        if suffix in (s.lower() for s in fmt.suffixes):
+            return fmt
+    known = sorted({s for f in formats.values() for s in f.suffixes})
+    raise MotionError(f"no motion format reads '{suffix}' files; known: {', '.join(known)}",
+                      file=path)
+
+
+def load_motions(
+    path: str | Path | None = None,
+    formats: Mapping[str, MotionFormat] | None = None,
+    *,
+    height: float | None = None,
+) -> list[MotionClip]:
+    """Clips from ``path`` / ``$RETARGET_DATA``, or the generated default set."""
+    if formats is None:
+        formats = default_formats()
+    suffixes = [s for f in formats.values() for s in f.suffixes]
+    files = resolve_motion_source(path, suffixes)
+    if files is None:
+        from retarget.motion.procedural import default_motions
+
+        return default_motions() if height is None else default_motions(height)
+    return [reader_for(f, formats).read(f) for f in files]
+
+
+def default_formats() -> dict[str, MotionFormat]:
+    """One default-configured instance of every registered motion format."""
+    from retarget.loader import load_plugins
+
+    registry = load_plugins()
+    return {name: registry.get("motion_format", name).cls()  # type: ignore[misc]
+            for name in registry.names("motion_format")}
