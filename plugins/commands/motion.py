@@ -1,23 +1,117 @@
-"""``retarget motion``: inspect and render motion clips."""
+"""``retarget motion``: inspect motion files and render them to pictures."""
 
 from __future__ import annotations
 
 import argparse
+import os
+from pathlib import Path
+
+import numpy as np
 
 import retarget
-from retarget import Command
+from retarget import Command, MotionError, RetargetError
+from retarget.motion.clip import MotionClip
+
+
+def _formats(args: argparse.Namespace) -> dict:
+    registry = getattr(args, "registry", None)
+    if registry is None:
+        from retarget.motion.sources import default_formats
+
+        return default_formats()
+    return {n: registry.get("motion_format", n).cls() for n in registry.names("motion_format")}
+
+
+def _read(path: str, args: argparse.Namespace) -> MotionClip:
+    from retarget.motion.sources import reader_for
+
+    p = Path(path)
+    if not p.is_file():
+        raise MotionError("no such file", file=p)
+    return reader_for(p, _formats(args)).read(p)
 
 
 class MotionCommand(Command):
-    """Inspect motion files (table of clip facts) and render them to images."""
+    """Inspect motion files (frames, rate, skeleton, height, contacts) or render a clip.
+
+    ``retarget motion inspect FILE...`` prints one table row per file;
+    ``retarget motion show FILE --out clip.png`` writes a contact sheet of evenly spaced frames
+    (``.mp4`` needs the optional ``imageio-ffmpeg`` package).
+    """
 
     name = "motion"
     help = "inspect and render motion clips"
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
-        parser.add_argument("action", choices=("inspect", "show"))
+        sub = parser.add_subparsers(dest="motion_action", metavar="ACTION", required=True)
+        inspect = sub.add_parser("inspect", help="table of clip facts")
+        inspect.add_argument("files", nargs="+", metavar="FILE")
+        show = sub.add_parser("show", help="render a clip to .png (frame grid) or .mp4")
+        show.add_argument("file", metavar="FILE")
+        show.add_argument("--out", required=True, help="output .png or .mp4")
+        show.add_argument("--frames", type=int, default=8, help="frames in a .png grid")
+        show.add_argument("--size", type=int, default=320, help="pixels per frame")
+        show.add_argument("--start", type=float, default=0.0, help="first second to show")
+        show.add_argument("--end", type=float, default=None, help="last second to show")
 
     def run(self, args: argparse.Namespace) -> int:
+        if args.motion_action == "inspect":
+            return self._inspect(args)
+        return self._show(args)
+
+    def _inspect(self, args: argparse.Namespace) -> int:
+        from rich.console import Console
+        from rich.table import Table
+
+        table = Table(title="motion clips")
+        for col in ("file", "frames", "fps", "seconds", "skeleton", "height m",
+                    "contact L", "contact R", "units", "up"):
+            table.add_column(col, justify="left" if col in ("file", "skeleton") else "right")
+        for f in args.files:
+            clip = _read(f, args)
+            c = clip.contacts
+            table.add_row(Path(f).name, str(clip.num_frames), f"{clip.fps:g}",
+                          f"{clip.duration:.2f}", clip.skeleton, f"{clip.height:.2f}",
+                          f"{c[:, 0].mean():.2f}", f"{c[:, 1].mean():.2f}",
+                          str(clip.meta.get("units", "-")), str(clip.meta.get("up", "-")))
+        Console(soft_wrap=True).print(table)
+        return 0
+
+    def _show(self, args: argparse.Namespace) -> int:
+        os.environ.setdefault("MUJOCO_GL", "osmesa")
+        from retarget.motion.render import contact_sheet, render_frames, write_png
+
+        out = Path(args.out)
+        suffix = out.suffix.lower()
+        if suffix not in (".png", ".mp4"):
+            raise RetargetError(f"--out must end in .png or .mp4, got '{out.name}'")
+        clip = _read(args.file, args)
+        first = int(np.clip(round(args.start * clip.fps), 0, clip.num_frames - 1))
+        last = clip.num_frames - 1 if args.end is None else int(
+            np.clip(round(args.end * clip.fps), first, clip.num_frames - 1))
+        if suffix == ".png":
+            count = max(1, min(args.frames, last - first + 1))
+            frames = np.linspace(first, last, count).round().astype(int)
+            images = render_frames(clip, frames, width=args.size, height=args.size)
+            write_png(out, contact_sheet(images, columns=min(4, count)))
+        else:
+            try:
+                import imageio_ffmpeg
+            except ImportError:
+                raise RetargetError(
+                    "writing .mp4 needs the optional package imageio-ffmpeg",
+                    hint="pip install imageio-ffmpeg, or write a .png frame grid instead",
+                ) from None
+            step = max(1, round(clip.fps / 30.0))
+            frames = np.arange(first, last + 1, step)
+            images = render_frames(clip, frames, width=args.size, height=args.size)
+            writer = imageio_ffmpeg.write_frames(str(out), (args.size, args.size),
+                                                 fps=clip.fps / step)
+            writer.send(None)
+            for img in images:
+                writer.send(np.ascontiguousarray(img))
+            writer.close()
+        print(f"wrote {out}")
         return 0
 
 
