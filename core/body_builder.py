@@ -62,6 +62,11 @@ ARMATURE_PER_NM = 1e-4
 """Armature (kg m^2) per N m of torque limit: a rotor inertia that scales with the joint's
 strength, so a 300 N m hip gets 0.03 and a 4 N m Oppy elbow 4e-4."""
 
+PASSIVE_ARMATURE = 0.5
+"""Armature of a passive hinge as a fraction of its effective inertia at rest. Tail tips and ear
+segments weigh grams; without it a violently moving body makes them the stiffest part of the
+system. The spring is tuned with the armature included, so the frequency is unchanged."""
+
 AXES: Mapping[str, Vec3] = {"x": (1.0, 0.0, 0.0), "y": (0.0, 1.0, 0.0), "z": (0.0, 0.0, 1.0)}
 
 
@@ -224,9 +229,15 @@ class BodyBuilder:
     """
 
     def __init__(self, name: str, *, timestep: float = DEFAULT_TIMESTEP,
-                 rgba: tuple[float, float, float, float] = (0.7, 0.6, 0.5, 1.0)) -> None:
+                 rgba: tuple[float, float, float, float] = (0.7, 0.6, 0.5, 1.0),
+                 damping_per_nm: float = DAMPING_PER_NM,
+                 armature_per_nm: float = ARMATURE_PER_NM,
+                 passive_armature: float = PASSIVE_ARMATURE) -> None:
         self.name = name
         self.timestep = timestep
+        self.damping_per_nm = damping_per_nm
+        self.armature_per_nm = armature_per_nm
+        self.passive_armature = passive_armature
         self.rgba = rgba
         self._bodies: dict[str, _BodyRecord] = {}
         self._root: str | None = None
@@ -284,14 +295,14 @@ class BodyBuilder:
         params = {h: (r.joint.frequency, r.joint.damping_ratio)
                   for r in self._bodies.values() if r.joint is not None and r.joint.passive
                   for h in r.joint.hinge_names()}
-        gains = _passive_gains(model, params)
+        gains = _passive_gains(model, params, self.passive_armature)
         spec, joints = self._make_spec(density, lift=-low, passive_gains=gains)
         model = spec.compile()
         return BuiltCharacter(spec=spec, joints=joints, density=density,
                               mass=float(model.body_mass.sum()), height=high - low)
 
     def _make_spec(self, density: float, lift: float,
-                   passive_gains: Mapping[str, tuple[float, float, float]] | None
+                   passive_gains: Mapping[str, tuple[float, float, float, float]] | None
                    ) -> tuple[mujoco.MjSpec, dict[str, JointInfo]]:
         spec = mujoco.MjSpec()
         spec.modelname = self.name
@@ -316,7 +327,8 @@ class BodyBuilder:
                 body.add_site(name=sname, pos=list(spos), size=[ssize, 0, 0],
                               rgba=[1.0, 0.2, 0.2, 0.6], group=4)
             if rec.joint is not None:
-                joints[rec.joint.name] = _add_joint(spec, body, rec.joint, passive_gains)
+                joints[rec.joint.name] = _add_joint(spec, body, rec.joint, passive_gains,
+                                                    self.damping_per_nm, self.armature_per_nm)
         return spec, joints
 
 
@@ -342,20 +354,22 @@ def _add_geom(body: mujoco.MjsBody, name: str, g: Geom, density: float,
 
 
 def _add_joint(spec: mujoco.MjSpec, body: mujoco.MjsBody, j: Joint,
-               passive_gains: Mapping[str, tuple[float, float, float]] | None) -> JointInfo:
+               passive_gains: Mapping[str, tuple[float, float, float, float]] | None,
+               damping_per_nm: float, armature_per_nm: float) -> JointInfo:
     names = j.hinge_names()
     for hname, dof in zip(names, j.dofs, strict=True):
         jh = body.add_joint(name=hname, type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(AXES[dof.axis]),
                             range=[math.radians(dof.lower), math.radians(dof.upper)])
         jh.limited = mujoco.mjtLimited.mjLIMITED_TRUE
         if j.passive:
-            k, c, ref = (passive_gains or {}).get(hname, (1.0, 0.1, 0.0))
+            k, c, ref, arm = (passive_gains or {}).get(hname, (1.0, 0.1, 0.0, 0.0))
             jh.stiffness = [k, 0.0, 0.0]  # MuJoCo >= 4: polynomial coefficients, linear first
             jh.damping = [c, 0.0, 0.0]
             jh.springref = ref
+            jh.armature = arm
         else:
-            jh.damping = [DAMPING_PER_NM * j.torque, 0.0, 0.0]
-            jh.armature = ARMATURE_PER_NM * j.torque
+            jh.damping = [damping_per_nm * j.torque, 0.0, 0.0]
+            jh.armature = armature_per_nm * j.torque
             act = spec.add_actuator(name=hname, target=hname,
                                     trntype=mujoco.mjtTrn.mjTRN_JOINT)
             act.set_to_motor()
@@ -368,34 +382,35 @@ def _add_joint(spec: mujoco.MjSpec, body: mujoco.MjsBody, j: Joint,
                      axes=tuple(d.axis for d in j.dofs), passive=j.passive, torque=j.torque)
 
 
-def _passive_gains(model: mujoco.MjModel,
-                   params: Mapping[str, tuple[float, float]]
-                   ) -> dict[str, tuple[float, float, float]]:
+def _passive_gains(model: mujoco.MjModel, params: Mapping[str, tuple[float, float]],
+                   armature: float) -> dict[str, tuple[float, float, float, float]]:
     """Stiffness/damping per passive hinge from its effective inertia at the rest pose.
 
     ``params`` maps hinge name -> (frequency Hz, damping ratio). ``k = I w^2`` and
     ``c = 2 zeta I w`` with ``w = 2 pi f`` and ``I`` the diagonal of the joint-space mass matrix:
     the joint swings at ``f`` Hz with damping ratio ``zeta`` when the rest of the chain is held,
-    whatever the character's scale. Returns hinge -> (stiffness, damping, springref).
+    whatever the character's scale. Returns hinge -> (stiffness, damping, springref, armature),
+    the armature being ``armature`` times the inertia and included in ``I``.
     """
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     unit = np.zeros(model.nv)
     column = np.zeros(model.nv)
-    out: dict[str, tuple[float, float, float]] = {}
+    out: dict[str, tuple[float, float, float, float]] = {}
     for hname, (freq, zeta) in params.items():
         jid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, hname)
         dof = model.jnt_dofadr[jid]
         unit[:] = 0.0
         unit[dof] = 1.0
         mujoco.mj_mulM(model, data, column, unit)  # M e_dof: version-independent access to M
-        inertia = float(column[dof])
+        arm = armature * float(column[dof])
+        inertia = float(column[dof]) + arm
         w = 2 * math.pi * freq
         k = inertia * w * w
         # Pre-load the spring so gravity and spring balance at the rest pose: a heavy tail then
         # holds its modelled shape when standing and swings about it, instead of sagging.
         springref = float(data.qfrc_bias[dof]) / k
-        out[hname] = (k, 2 * zeta * inertia * w, springref)
+        out[hname] = (k, 2 * zeta * inertia * w, springref, arm)
     return out
 
 

@@ -61,7 +61,9 @@ class Oppy(ProceduralCharacter):
         def t(fam: str) -> float:
             return cfg.max_torque * TORQUE_SCALES[fam]
 
-        b = BodyBuilder("oppy", rgba=(0.62, 0.6, 0.66, 1.0))
+        # Damping 0.025 N m s/rad per N m (terminal speed 40 rad/s): a 7 kg body with 40 N m
+        # hips otherwise reaches joint limits fast enough to go unstable under random torques.
+        b = BodyBuilder("oppy", rgba=(0.62, 0.6, 0.66, 1.0), damping_per_nm=0.025)
         pink = (0.95, 0.68, 0.72, 1.0)
         b.root("pelvis", v(0, 0, 0.2), [Ellipsoid((0, 0, 0), v(0.075, 0.085, 0.06))])
         b.site("root", "pelvis", (0.0, 0.0, 0.0))
