@@ -19,6 +19,8 @@ from __future__ import annotations
 import torch
 
 __all__ = [
+    "ground_origin",
+    "heading_cos_sin",
     "heading_quat",
     "quat_angle",
     "quat_apply",
@@ -31,6 +33,7 @@ __all__ = [
     "to_heading_points",
     "to_heading_quats",
     "to_heading_vectors",
+    "unyaw",
     "yaw_quat",
 ]
 
@@ -94,10 +97,27 @@ def quat_to_6d(q: torch.Tensor) -> torch.Tensor:
 
     Laid out as ``[c0x, c0y, c0z, c1x, c1y, c1z]`` (the rotated x axis, then the rotated y
     axis). Unlike quaternions it has no sign ambiguity and no discontinuity, which is why
-    networks get it instead of ``wxyz``.
+    networks get it instead of ``wxyz``. Only the six needed entries are computed.
     """
-    m = quat_to_matrix(q)
-    return torch.cat([m[..., :, 0], m[..., :, 1]], dim=-1)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    cols = [
+        1 - 2 * (y * y + z * z),
+        2 * (x * y + w * z),
+        2 * (x * z - w * y),
+        2 * (x * y - w * z),
+        1 - 2 * (x * x + z * z),
+        2 * (y * z + w * x),
+    ]
+    return torch.stack(cols, dim=-1)
+
+
+# x and y of the rotated x axis as a quadratic form of the quaternion: vec(q q^T) @ M + b.
+# One outer and one matrix product replace a dozen small element-wise operations, whose fixed
+# per-call cost dominates at the (N, 4) size of one root per environment.
+_FORWARD_M = torch.zeros(16, 2)
+_FORWARD_M[[10, 15], 0] = -2.0  # fx = 1 - 2 (y^2 + z^2)
+_FORWARD_M[[6, 9, 3, 12], 1] = 1.0  # fy = 2 (x y + w z), split over both symmetric entries
+_FORWARD_B = torch.tensor([1.0, 0.0])
 
 
 def quat_angle(q: torch.Tensor) -> torch.Tensor:
@@ -121,17 +141,48 @@ def yaw_quat(yaw: torch.Tensor) -> torch.Tensor:
     return torch.stack([torch.cos(half), zero, zero, torch.sin(half)], dim=-1)
 
 
-def heading_quat(q: torch.Tensor) -> torch.Tensor:
-    """The yaw-only part of orientations ``q``: the direction the body's x axis points in.
+def heading_cos_sin(q: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """Cosine and sine of the heading (yaw) of orientations ``q``, without trigonometry.
 
-    The heading is the azimuth of the rotated local x axis projected on the ground plane. When
-    that axis is vertical (a body lying pointed straight up) the azimuth is undefined;
-    ``atan2(0, 0) = 0`` keeps it finite.
+    The heading is the azimuth of the body's rotated x axis projected on the ground plane. When
+    that axis is vertical (a body pointed straight up) the azimuth is undefined and 0 is used,
+    which keeps everything finite.
     """
-    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    fx = 1.0 - 2.0 * (y * y + z * z)  # first column of the rotation matrix
-    fy = 2.0 * (x * y + w * z)
-    return yaw_quat(torch.atan2(fy, fx))
+    outer = (q.unsqueeze(-1) * q.unsqueeze(-2)).flatten(-2)
+    forward = outer @ _FORWARD_M.to(q.dtype) + _FORWARD_B.to(q.dtype)
+    forward[..., 0] += 1e-12  # a vertical x axis normalises to heading 0, not to (0, 0)
+    forward = torch.nn.functional.normalize(forward, dim=-1, eps=1e-12)
+    return forward[..., 0], forward[..., 1]
+
+
+def heading_quat(q: torch.Tensor) -> torch.Tensor:
+    """The yaw-only part of orientations ``q`` (see :func:`heading_cos_sin`)."""
+    c, s = heading_cos_sin(q)
+    # half-angle formulas: cos(a/2) = sqrt((1+c)/2), sin(a/2) = sign(s) sqrt((1-c)/2)
+    half_c = torch.sqrt(((1.0 + c) * 0.5).clamp_min(0.0))
+    half_s = torch.sqrt(((1.0 - c) * 0.5).clamp_min(0.0))
+    half_s = torch.where(s < 0, -half_s, half_s)
+    zero = torch.zeros_like(c)
+    return torch.stack([half_c, zero, zero, half_s], dim=-1)
+
+
+def unyaw(vectors: torch.Tensor, c: torch.Tensor, s: torch.Tensor) -> torch.Tensor:
+    """Rotate vectors ``(N, ..., 3)`` by minus the yaws whose cosines/sines are ``c, s`` (N,).
+
+    A rotation about Z only mixes x and y, so this is four multiplies per vector: the cheap path
+    sensors use for positions and for the columns of 6D rotations alike.
+    """
+    shape = (c.shape[0],) + (1,) * (vectors.ndim - 2)
+    c, s = c.reshape(shape), s.reshape(shape)
+    x, y = vectors[..., 0], vectors[..., 1]
+    return torch.stack([c * x + s * y, c * y - s * x, vectors[..., 2]], dim=-1)
+
+
+def ground_origin(root_pos: torch.Tensor, keep_height: bool = True) -> torch.Tensor:
+    """Origin of the heading frame: the root's ground projection, or the root itself."""
+    if keep_height:
+        return torch.cat([root_pos[:, :2], torch.zeros_like(root_pos[:, 2:])], dim=-1)
+    return root_pos
 
 
 def _per_env(t: torch.Tensor, ndim: int) -> torch.Tensor:
@@ -151,18 +202,13 @@ def to_heading_points(
     The origin is the root's ground projection (``keep_height=True``: z stays the world height)
     or the root itself (``keep_height=False``).
     """
-    origin = root_pos
-    if keep_height:
-        origin = torch.cat([root_pos[:, :2], torch.zeros_like(root_pos[:, 2:])], dim=-1)
-    inv = quat_conj(heading_quat(root_quat))
-    rel = points - _per_env(origin, points.ndim)
-    return quat_apply(_per_env(inv, points.ndim), rel)
+    rel = points - _per_env(ground_origin(root_pos, keep_height), points.ndim)
+    return unyaw(rel, *heading_cos_sin(root_quat))
 
 
 def to_heading_vectors(vectors: torch.Tensor, root_quat: torch.Tensor) -> torch.Tensor:
     """Free vectors (velocities) ``(N, ..., 3)`` in the heading frame: rotated, not moved."""
-    inv = quat_conj(heading_quat(root_quat))
-    return quat_apply(_per_env(inv, vectors.ndim), vectors)
+    return unyaw(vectors, *heading_cos_sin(root_quat))
 
 
 def to_heading_quats(quats: torch.Tensor, root_quat: torch.Tensor) -> torch.Tensor:

@@ -37,12 +37,16 @@ class Orientation(RewardTerm):
 
     def bind(self, layout: Layout) -> None:
         self._head = layout.site("head")
+        self._weights = torch.tensor(
+            [self.config.root_weight, self.config.head_weight], dtype=torch.float32
+        )
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
         h = self._head
-        d_root = rotation_distance(ctx.ref.pose.qpos[:, 3:7], ctx.sim.qpos[:, 3:7])
-        d_head = rotation_distance(ctx.ref.pose.site_quat[:, h], ctx.sim.site_quat[:, h])
-        d = self.config.root_weight * d_root + self.config.head_weight * d_head
+        # root and head in one (N, 2, 4) batch: one product and one atan2 for both
+        ref = torch.stack([ctx.ref.pose.qpos[:, 3:7], ctx.ref.pose.site_quat[:, h]], dim=1)
+        sim = torch.stack([ctx.sim.qpos[:, 3:7], ctx.sim.site_quat[:, h]], dim=1)
+        d = (rotation_distance(ref, sim) * self._weights).sum(dim=-1)
         return gaussian_kernel(d, self.config.k).float()
 
 

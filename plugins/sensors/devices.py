@@ -19,9 +19,9 @@ from pydantic import Field
 
 import retarget
 from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
-from retarget.heading import quat_normalize, quat_to_6d, to_heading_points, to_heading_quats
+from retarget.heading import ground_origin, heading_cos_sin, quat_to_6d, unyaw
 
-HEADSET, LEFT, RIGHT = 0, 1, 2
+DEVICES = ("headset", "left", "right")
 """Device order along the ``D`` axis of ``ref.devices``."""
 
 
@@ -44,7 +44,7 @@ class _DeviceSensor(Sensor):
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         super().__init__(config)
-        self._window_cache: tuple[tuple[int, ...], torch.Tensor] | None = None
+        self._window_cache: tuple[tuple[int, ...], slice | torch.Tensor] | None = None
 
     @property
     def frames(self) -> int:
@@ -56,8 +56,11 @@ class _DeviceSensor(Sensor):
     def spec(self, layout: Layout) -> ObsSpec:
         return ObsSpec((self.frames * self._features_per_frame(),))
 
-    def _window(self, offsets: tuple[int, ...]) -> torch.Tensor:
-        """Indices into the W axis for offsets ``-past .. future`` (cached per offsets tuple)."""
+    def _window(self, offsets: tuple[int, ...]) -> slice | torch.Tensor:
+        """Entries of the W axis for offsets ``-past .. future`` (cached per offsets tuple).
+
+        A slice when they are consecutive (the usual case: a view, no copy), else an index.
+        """
         if self._window_cache is not None and self._window_cache[0] == offsets:
             return self._window_cache[1]
         wanted = range(-self.config.past, self.config.future + 1)
@@ -69,25 +72,33 @@ class _DeviceSensor(Sensor):
                 plugin=self.name,
                 hint="widen the environment's device window or lower past/future",
             )
-        idx = torch.tensor([offsets.index(o) for o in wanted], dtype=torch.long)
+        found = [offsets.index(o) for o in wanted]
+        if found == list(range(found[0], found[0] + len(found))):
+            idx: slice | torch.Tensor = slice(found[0], found[0] + len(found))
+        else:
+            idx = torch.tensor(found, dtype=torch.long)
         self._window_cache = (offsets, idx)
         return idx
 
-    def _devices(self, ctx: StepContext, devices: list[int]) -> tuple[torch.Tensor, torch.Tensor]:
-        """Positions ``(N, F, d, 3)`` and 6D rotations ``(N, F, d, 6)`` in the heading frame."""
-        if ctx.ref.devices.shape[2] <= max(devices):
+    def _devices(self, ctx: StepContext, count: int) -> tuple[torch.Tensor, torch.Tensor]:
+        """Positions ``(N, F, d, 3)`` and 6D rotations ``(N, F, d, 6)`` of the first ``count``
+        devices in the heading frame (device quaternions are unit, as ``ReferenceBatch`` says).
+        """
+        if ctx.ref.devices.shape[2] < count:
             raise PluginError(
-                f"needs devices {devices} but the reference has {ctx.ref.devices.shape[2]}",
+                f"needs {count} devices (headset, left, right) but the reference has "
+                f"{ctx.ref.devices.shape[2]}",
                 plugin=self.name,
             )
         window = self._window(tuple(ctx.ref.window_offsets))
-        dev = ctx.ref.devices[:, window][:, :, devices]
+        dev = ctx.ref.devices[:, window, :count]  # (N, F, d, 7)
         root_pos, root_quat = ctx.sim.qpos[:, :3], ctx.sim.qpos[:, 3:7]
-        pos = to_heading_points(
-            dev[..., :3], root_pos, root_quat, keep_height=self.config.keep_height
-        )
-        rot = quat_to_6d(to_heading_quats(quat_normalize(dev[..., 3:7]), root_quat))
-        return pos, rot
+        origin = ground_origin(root_pos, self.config.keep_height)
+        rel = dev[..., :3] - origin[:, None, None]
+        cols = quat_to_6d(dev[..., 3:7]).unflatten(-1, (2, 3))
+        # one yaw rotation for positions and both rotation columns: (N, F, d, 3 vectors, 3)
+        vectors = unyaw(torch.cat([rel.unsqueeze(-2), cols], dim=-2), *heading_cos_sin(root_quat))
+        return vectors[..., 0, :], vectors[..., 1:, :].flatten(-2)
 
 
 class Hmd(_DeviceSensor):
@@ -105,7 +116,7 @@ class Hmd(_DeviceSensor):
         return 9
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
-        pos, rot = self._devices(ctx, [HEADSET])
+        pos, rot = self._devices(ctx, 1)
         return torch.cat([pos, rot], dim=-1).reshape(ctx.num_envs, -1).float()
 
 
@@ -126,7 +137,7 @@ class ThreePoint(_DeviceSensor):
         return 27 if self.config.controller_rotation else 15
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
-        pos, rot = self._devices(ctx, [HEADSET, LEFT, RIGHT])
+        pos, rot = self._devices(ctx, 3)
         if self.config.controller_rotation:
             per_device = torch.cat([pos, rot], dim=-1)  # (N, F, 3, 9)
         else:

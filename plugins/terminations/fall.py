@@ -8,8 +8,12 @@ A body of the ``upper_body`` group counts as touching the ground when both hold:
 
 The ground height comes from the scene's ``height_at`` when the step has a scene, else the
 floor at z = 0. Body origins sit inside the body, so the height threshold must exceed the
-thickness of the character's torso and arms: 0.3 m suits human-sized characters; raise it for
-large ones (Dino) and lower it for small ones (Oppy) in their recipes.
+thickness of the character's torso and arms yet stay below their standing height. Letting the
+built-in characters collapse with zero torque, the first upper-body touch happens with origins
+at 0.25-0.27 m (human arms, Dino spine, Oppy head) and fallen bodies lie at 0.08-0.29 m, while
+standing origins are at 0.96 m (human), 1.15 m (Dino) but only 0.25 m (Oppy's torso): the 0.3 m
+default suits human and Dino; Oppy's recipe should lower it (about 0.2 m) so that a standing
+Oppy whose arm brushes its own torso is not counted as fallen.
 """
 
 from __future__ import annotations

@@ -132,3 +132,10 @@ def test_vertical_shift_is_seen_unless_relative_to_root() -> None:
     assert not torch.allclose(_observe(Hmd(), up), _observe(Hmd(), ctx))
     relative = Hmd(Hmd.Config(keep_height=False))
     torch.testing.assert_close(_observe(relative, up), _observe(relative, ctx))
+
+
+def test_window_in_any_order() -> None:
+    ctx = _at_origin(fake_context(LAYOUT, 2, seed=5, window_offsets=(0, -1, 2, 1)))
+    out = _observe(Hmd(Hmd.Config(past=1, future=1)), ctx).reshape(2, 3, 9)
+    frames = ctx.ref.devices[:, [1, 0, 3], 0]  # offsets -1, 0, 1
+    torch.testing.assert_close(out[..., :3], frames[..., :3])

@@ -7,6 +7,7 @@ import math
 import torch
 
 from retarget.heading import (
+    heading_cos_sin,
     heading_quat,
     quat_angle,
     quat_apply,
@@ -81,3 +82,10 @@ def test_heading_frame_of_a_turned_root() -> None:
     torch.testing.assert_close(
         to_heading_quats(root_quat[:, None], root_quat), torch.tensor([[[1.0, 0.0, 0.0, 0.0]]])
     )
+
+
+def test_heading_of_a_vertical_body_is_finite() -> None:
+    pitch_up = torch.tensor([[math.cos(math.pi / 4), 0.0, -math.sin(math.pi / 4), 0.0]])
+    c, s = heading_cos_sin(pitch_up)  # x axis points straight up: heading undefined
+    assert torch.isfinite(c).all() and torch.isfinite(s).all()
+    torch.testing.assert_close(c * c + s * s, torch.ones(1))
