@@ -210,5 +210,19 @@ def to_euler(q: np.ndarray, order: str, *, degrees: bool = True) -> np.ndarray:
     b = np.arcsin(np.clip(s * m[..., i, k], -1.0, 1.0))
     a = np.arctan2(-s * m[..., j, k], m[..., k, k])
     c = np.arctan2(-s * m[..., i, j], m[..., i, i])
+    # gimbal lock (middle angle +-90 deg): only a +- c is defined; take c = 0 and read a from
+    # R @ Rj(b)^T, which is then a pure rotation about axis i
+    lock = np.abs(m[..., i, k]) > 1.0 - 1e-9
+    if np.any(lock):
+        axis = np.zeros(3)
+        axis[j] = 1.0
+        rj = to_matrix(from_axis_angle(axis, b))
+        rest = m @ np.swapaxes(rj, -1, -2)
+        if s > 0:
+            a_lock = np.arctan2(rest[..., k, j], rest[..., j, j])
+        else:
+            a_lock = np.arctan2(rest[..., j, k], rest[..., k, k])
+        a = np.where(lock, a_lock, a)
+        c = np.where(lock, 0.0, c)
     out = np.stack([a, b, c], axis=-1)
     return np.rad2deg(out) if degrees else out

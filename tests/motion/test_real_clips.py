@@ -113,5 +113,5 @@ def test_contact_ratios_are_plausible(real_clips):
         elif "run" in name:
             assert max(left, right) < 0.5 and both < 0.02, (name, report[name])
         else:
-            assert 0.3 <= min(left, right) and max(left, right) <= 0.98, (name, report[name])
+            assert min(left, right) >= 0.3 and max(left, right) <= 0.98, (name, report[name])
     print("\ncontact ratios (left, right, both):", report)
