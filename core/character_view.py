@@ -70,9 +70,33 @@ def fit_camera(model: mujoco.MjModel, data: mujoco.MjData, azimuth: float = 135.
     return cam
 
 
+def ensure_offscreen() -> None:
+    """Switch MuJoCo's renderer to OSMesa when there is no display and GLFW was picked.
+
+    MuJoCo reads ``MUJOCO_GL`` once, when ``mujoco`` is first imported; in a process where
+    something imported it before this module (a test session, a plugin), the GLFW backend it
+    picked aborts without a display. The renderer looks its context class up at construction,
+    so pointing it at OSMesa here is enough.
+    """
+    if os.environ.get("DISPLAY") or os.environ.get("MUJOCO_GL", "").lower() == "egl":
+        return
+    from mujoco.rendering.classic import gl_context
+
+    current = getattr(gl_context, "GLContext", None)
+    if current is None or "osmesa" in getattr(current, "__module__", ""):
+        return
+    try:
+        from mujoco.osmesa import GLContext
+    except ImportError as exc:  # pragma: no cover - depends on system libraries
+        raise RetargetError("offscreen rendering needs OSMesa (apt-get install libosmesa6) "
+                            "or MUJOCO_GL=egl with a GPU") from exc
+    gl_context.GLContext = GLContext
+
+
 def render(model: mujoco.MjModel, data: mujoco.MjData, cam: mujoco.MjvCamera,
            width: int = 960, height: int = 720, sites: bool = False) -> np.ndarray:
     """One RGB frame; the renderer is closed before returning (its GL context is freed)."""
+    ensure_offscreen()
     opt = mujoco.MjvOption()
     if sites:
         opt.sitegroup[:] = 1
@@ -88,6 +112,7 @@ class FrameRenderer:
     """Renders many frames of one model with one renderer (closed by ``close``/context exit)."""
 
     def __init__(self, model: mujoco.MjModel, width: int, height: int) -> None:
+        ensure_offscreen()
         self.renderer = mujoco.Renderer(model, height=height, width=width)
 
     def __call__(self, data: mujoco.MjData, cam: mujoco.MjvCamera) -> np.ndarray:
