@@ -54,10 +54,15 @@ class ProceduralCharacter(Character):
     def default_joint_map(self) -> JointMap:
         """The hand-made pairing of human and character joints."""
 
+    @property
+    def target_mass(self) -> float:
+        """Total mass the uniform density is solved for (the config's ``mass``)."""
+        return float(self.config.mass)
+
     def built(self) -> BuiltCharacter:
         """The built spec and its facts (density, mass, height, joints), built once."""
         if self._built is None:
-            self._built = self.describe().build(mass=self.config.mass)
+            self._built = self.describe().build(mass=self.target_mass)
         return self._built
 
     def build_spec(self) -> mujoco.MjSpec:

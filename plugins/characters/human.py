@@ -46,11 +46,6 @@ class Human(ProceduralCharacter):
         h = self.config.height
         return self.config.mass if self.config.mass is not None else 22.9 * h * h
 
-    def built(self):  # type: ignore[override]
-        if self._built is None:
-            self._built = self.describe().build(mass=self.target_mass)
-        return self._built
-
     def describe(self) -> BodyBuilder:
         return build_humanoid("human", self.config.height, self.config.max_torque,
                               HumanoidShape())
