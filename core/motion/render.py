@@ -82,6 +82,9 @@ def render_frames(
     """
     import mujoco
 
+    from retarget.character_view import ensure_offscreen
+
+    ensure_offscreen()
     model = mujoco.MjModel.from_xml_string(_SCENE.format(w=width, h=height))
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)  # world geom frames (the floor) are set by kinematics

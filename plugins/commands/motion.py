@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -74,7 +75,8 @@ class MotionCommand(Command):
                           f"{clip.duration:.2f}", clip.skeleton, f"{clip.height:.2f}",
                           f"{c[:, 0].mean():.2f}", f"{c[:, 1].mean():.2f}",
                           str(clip.meta.get("units", "-")), str(clip.meta.get("up", "-")))
-        Console(soft_wrap=True).print(table)
+        # full names and numbers even when piped (rich would squeeze the table to 80 columns)
+        Console(soft_wrap=True, width=None if sys.stdout.isatty() else 200).print(table)
         return 0
 
     def _show(self, args: argparse.Namespace) -> int:
