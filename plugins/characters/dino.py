@@ -68,6 +68,10 @@ class Dino(ProceduralCharacter):
     segments 2-DoF (yaw, pitch), elbows, knees and toes 1-DoF; hands and jaw are welded. The tail
     has ``tail_active`` actuated joints at its base, the rest passive, fixed or active
     (``tail``). Lower-body joint weight 0.3 and tail weight 0 (App. A); torque scales Table 4.
+
+    That is 56 DoF (44 actuated) where Table 1 says 44: the paper does not give DoF per joint,
+    and a tail that swings in one plane only, or a spine without twist, would lose the secondary
+    motion and the torso turns the mapping relies on.
     """
 
     name = "dino"

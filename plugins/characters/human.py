@@ -31,6 +31,9 @@ class HumanConfig(CharacterConfig):
 class Human(ProceduralCharacter):
     """A human avatar on the canonical skeleton's proportions (18 links, 35 DoF).
 
+    QuestEnvSim's avatar has 18 links and 32 DoF; the three extra here are the wrists' second
+    hinge and the toes, which keep the controller orientation and the foot roll of the mocap.
+
     Like the QuestEnvSim avatar: capsules/boxes/spheres of uniform density, torque actuated,
     no self-collision. Joint centres are the canonical T-pose joints at the configured height,
     so kinematic retargeting of a human clip is exact up to the folded collar and spine joints.
