@@ -31,8 +31,9 @@ class HumanConfig(CharacterConfig):
 class Human(ProceduralCharacter):
     """A human avatar on the canonical skeleton's proportions (18 links, 35 DoF).
 
-    QuestEnvSim's avatar has 18 links and 32 DoF; the three extra here are the wrists' second
-    hinge and the toes, which keep the controller orientation and the foot roll of the mocap.
+    QuestEnvSim's avatar has 18 links and 32 DoF without a published split; ours has 3-DoF
+    abdomen, chest, neck, shoulders and hips, 2-DoF wrists and ankles, 1-DoF elbows, knees and
+    toes (35), so the controller orientation and the foot roll of the mocap are kept.
 
     Like the QuestEnvSim avatar: capsules/boxes/spheres of uniform density, torque actuated,
     no self-collision. Joint centres are the canonical T-pose joints at the configured height,
