@@ -122,8 +122,16 @@ class MotionLibrary:
         thousands of environments is cheap, the full body over the same window is not.
         """
         r = self.rows(clip, frame, offsets)
+        flat = r.reshape(-1)
         empty = torch.empty(0, device=self.device)
-        data = {k: getattr(self, k)[r] if k in fields else empty for k in FIELDS}
+
+        def gather(name: str) -> torch.Tensor:
+            # one index_select on a 2-D view: several times faster than n-d fancy indexing
+            table = getattr(self, name)
+            rows = table.reshape(table.shape[0], -1).index_select(0, flat)
+            return rows.reshape(*r.shape, *table.shape[1:])
+
+        data = {k: gather(k) if k in fields else empty for k in FIELDS}
         return ReferenceWindow(**data, offsets=tuple(int(o) for o in offsets))
 
     def advance(self, clip: torch.Tensor, frame: torch.Tensor, steps: int = 1
