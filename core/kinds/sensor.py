@@ -50,6 +50,13 @@ class Sensor(Plugin):
     def reset(self, env_ids: torch.Tensor) -> None:
         """Forget per-environment state of ``env_ids`` (stateless sensors ignore this)."""
 
+    def frames_needed(self) -> tuple[int, int]:
+        """(past, future) reference frames this sensor reads from ``ctx.ref.devices``.
+
+        The environment gathers the union of all sensors' windows once per step.
+        """
+        return (0, 0)
+
 
 class Observer(Sensor):
     """Base class of observers: scene perception (height maps, point clouds), batched."""

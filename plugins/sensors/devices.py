@@ -46,6 +46,9 @@ class _DeviceSensor(Sensor):
         super().__init__(config)
         self._window_cache: tuple[tuple[int, ...], slice | torch.Tensor] | None = None
 
+    def frames_needed(self) -> tuple[int, int]:
+        return (self.config.past, self.config.future)
+
     @property
     def frames(self) -> int:
         return self.config.past + 1 + self.config.future

@@ -89,3 +89,20 @@ def test_reset_subset(sim: BatchedSim) -> None:
     root = sim.layout.body_ids[0]
     np.testing.assert_allclose(sim.state.body_pos[[1, 4], 0, 0].numpy(), target[:, 0], atol=1e-5)
     assert root >= 1
+
+
+def test_body_velocities_match_finite_differences(sim: BatchedSim) -> None:
+    """Body-origin velocities agree with differentiating body positions along qvel."""
+    for a in _actions(sim.num_envs, sim.layout.nu, 8):
+        sim.step(a)
+    sim.batch.forward(np.array([1]))  # derived fields of the current state, not the last substep
+    sim.gather()
+    h = 1e-6
+    data = mujoco.MjData(sim.model)
+    data.qpos[:] = sim.raw("qpos")[1]
+    mujoco.mj_kinematics(sim.model, data)
+    before = data.xpos.copy()
+    mujoco.mj_integratePos(sim.model, data.qpos, sim.raw("qvel")[1], h)
+    mujoco.mj_kinematics(sim.model, data)
+    expected = (data.xpos - before)[list(sim.layout.body_ids)] / h
+    np.testing.assert_allclose(sim.state.body_linvel[1].numpy(), expected, atol=1e-3)
