@@ -73,12 +73,14 @@ def render_frames(
     width: int = 320,
     height: int = 320,
     azimuth: float | None = None,
+    view: str = "side",
     devices: bool = True,
 ) -> np.ndarray:
     """RGB images ``(K, height, width, 3)`` of the given frames, camera following the pelvis.
 
-    The camera looks at the body from its left side relative to the clip's mean heading
-    (``azimuth`` in degrees overrides), so walking goes left to right in the picture.
+    ``view="side"`` looks at the body from its side relative to the clip's direction of travel
+    (so walking goes left to right in the picture), ``"front"`` from straight ahead;
+    ``azimuth`` in degrees (MuJoCo's free camera) overrides both.
     """
     import mujoco
 
@@ -97,7 +99,8 @@ def render_frames(
 
             fwd = rot.apply(clip.global_rot[0, 0], fwd)
             travel = fwd[:2]
-        azimuth = float(np.degrees(np.arctan2(travel[1], travel[0]))) + 90.0
+        offset = {"side": 90.0, "front": 180.0}[view]
+        azimuth = float(np.degrees(np.arctan2(travel[1], travel[0]))) + offset
     dev = device_poses(pos, clip.global_rot, clip.height) if devices else None
     renderer = mujoco.Renderer(model, height, width)
     try:

@@ -54,6 +54,8 @@ class MotionCommand(Command):
         show.add_argument("--size", type=int, default=320, help="pixels per frame")
         show.add_argument("--start", type=float, default=0.0, help="first second to show")
         show.add_argument("--end", type=float, default=None, help="last second to show")
+        show.add_argument("--view", choices=("side", "front"), default="side",
+                          help="camera beside the direction of travel, or in front")
 
     def run(self, args: argparse.Namespace) -> int:
         if args.motion_action == "inspect":
@@ -94,7 +96,8 @@ class MotionCommand(Command):
         if suffix == ".png":
             count = max(1, min(args.frames, last - first + 1))
             frames = np.linspace(first, last, count).round().astype(int)
-            images = render_frames(clip, frames, width=args.size, height=args.size)
+            images = render_frames(clip, frames, width=args.size, height=args.size,
+                                   view=args.view)
             write_png(out, contact_sheet(images, columns=min(4, count)))
         else:
             try:
@@ -106,7 +109,8 @@ class MotionCommand(Command):
                 ) from None
             step = max(1, round(clip.fps / 30.0))
             frames = np.arange(first, last + 1, step)
-            images = render_frames(clip, frames, width=args.size, height=args.size)
+            images = render_frames(clip, frames, width=args.size, height=args.size,
+                                   view=args.view)
             writer = imageio_ffmpeg.write_frames(str(out), (args.size, args.size),
                                                  fps=clip.fps / step)
             writer.send(None)
