@@ -21,6 +21,7 @@ forward kinematics (to float precision where the source allows it). Three steps:
 from __future__ import annotations
 
 import itertools
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -190,7 +191,7 @@ _LEAF_DIRECTION = {"head": (0.0, 0.0, 1.0), "left_toe": (1.0, 0.0, 0.0),
 
 def _reference_rotations(
     src: SourceMotion, pos: np.ndarray, mats: np.ndarray, pos_src: list[int],
-    frames: list[int], t: int, world: np.ndarray, scale: float,
+    frames: list[int], t: int,
 ) -> np.ndarray:
     """Canonical global rotation matrices ``(J, 3, 3)`` at reference frame ``t``."""
     rest = sk.rest_offsets()
@@ -230,7 +231,7 @@ def _reference_rotations(
 
 def canonicalize(
     src: SourceMotion,
-    name_map: dict[str, str | None] | object,
+    name_map: Mapping[str, str | None],
     *,
     units: str | float | None = None,
     up: str | None = None,
@@ -241,7 +242,7 @@ def canonicalize(
     idx: dict[str, int | None] = {}
     pos_src: list[int] = []
     for j, name in enumerate(sk.JOINT_NAMES):
-        target = name_map[name]  # type: ignore[index]
+        target = name_map[name]
         if target is None:
             pos_src.append(pos_src[sk.PARENTS[j]])
             idx[name] = None
@@ -261,8 +262,11 @@ def canonicalize(
     pos = scale * np.einsum("ij,tsj->tsi", world, src.positions)
     mats = np.einsum("ij,tsjk->tsik", world, rot.to_matrix(src.rotations))
     frames = _choose_frames(src, pos, mats, pos_src)
+    if reference_frame is not None and not 0 <= reference_frame < pos.shape[0]:
+        raise MotionError(f"reference frame {reference_frame} is outside the clip's "
+                          f"{pos.shape[0]} frames")
     t_ref = _reference_frame(pos, pos_src) if reference_frame is None else reference_frame
-    ref = _reference_rotations(src, pos, mats, pos_src, frames, t_ref, world, scale)
+    ref = _reference_rotations(src, pos, mats, pos_src, frames, t_ref)
     align = np.einsum("jki,jkl->jil", mats[t_ref, frames], ref)  # C_j = R_F(t_ref)^T R_j
     gmat = np.einsum("tjik,jkl->tjil", mats[:, frames], align)
     grot = rot.from_matrix(gmat)

@@ -42,6 +42,7 @@ def clip_from_bvh(
     units: str | float | None = None,
     up: str | None = None,
     fps: float | None = None,
+    reference_frame: int | None = None,
     keep_source: bool = False,
 ) -> MotionClip:
     """Canonical clip of parsed BVH data (see module docstring)."""
@@ -50,7 +51,8 @@ def clip_from_bvh(
     src = source_motion(data)
     try:
         with np.errstate(all="ignore"):
-            clip, info = canonicalize(src, table, units=units, up=up)
+            clip, info = canonicalize(src, table, units=units, up=up,
+                                      reference_frame=reference_frame)
     except MotionError as exc:
         if exc.file is None:
             raise MotionError(exc.message, file=file, hint=exc.hint) from None

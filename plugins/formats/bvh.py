@@ -30,6 +30,9 @@ class BvhConfig(PluginConfig):
         None, description="up axis of the file; default: detected from the pose")
     fps: float | None = Field(
         None, gt=0, description="resample to this rate (slerp); default: keep the file's rate")
+    reference_frame: int | None = Field(
+        None, ge=0, description="frame on which the rest alignment is measured; default: the "
+        "most upright standing frame; 0 for files whose first frame is a T-pose calibration")
 
 
 class Bvh(MotionFormat):
@@ -41,7 +44,8 @@ class Bvh(MotionFormat):
 
     def read(self, path: Path) -> MotionClip:
         cfg: BvhConfig = self.config  # type: ignore[assignment]
-        return load_bvh(path, name_map=cfg.name_map, units=cfg.units, up=cfg.up, fps=cfg.fps)
+        return load_bvh(path, name_map=cfg.name_map, units=cfg.units, up=cfg.up, fps=cfg.fps,
+                        reference_frame=cfg.reference_frame)
 
     @classmethod
     def write_sample(cls, directory: Path) -> Path:

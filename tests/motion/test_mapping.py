@@ -146,3 +146,7 @@ def test_plugin_config_passes_options(tmp_path: Path):
     assert at36.fps == 36.0 and at36.duration == pytest.approx(native.duration, abs=1 / 30)
     with pytest.raises(Exception, match="units"):
         Bvh.Config(units="furlong")
+    first = Bvh(Bvh.Config(reference_frame=0)).read(path)  # the sample starts in the T-pose
+    assert np.degrees(rot.angle(first.local_rot[0])).max() < 1e-3
+    with pytest.raises(MotionError, match="outside"):
+        Bvh(Bvh.Config(reference_frame=10_000)).read(path)
