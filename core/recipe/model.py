@@ -47,6 +47,25 @@ class MotionsSection(Strict):
     )
 
 
+class SimSection(Strict):
+    """Physics timing: ``substeps`` steps of ``1/(control_hz*substeps)`` s per control step."""
+
+    control_hz: float = Field(36.0, gt=0, description="policy rate (the paper uses 36 Hz)")
+    substeps: int = Field(10, ge=1, description="physics steps per control step")
+    threads: int = Field(0, ge=0, description="physics threads; 0 uses every core")
+
+
+class EnvSection(Strict):
+    """The tracking environment's own settings (plugins configure the rest)."""
+
+    num_envs: int = Field(64, ge=1, description="environments stepped together")
+    privileged_offsets: list[int] = Field(
+        default_factory=lambda: [1, 3, 6],
+        description="future reference frames the critic sees (asymmetric critic)",
+    )
+    reset_lift: float = Field(0.02, ge=0, description="root lift at reset, m")
+
+
 class Recipe(Strict):
     """A complete, declarative description of one training or evaluation setup."""
 
@@ -60,6 +79,8 @@ class Recipe(Strict):
     terminations: dict[str, ComponentRef] = Field(default_factory=dict)
     algorithm: ComponentRef | None = None
     motions: MotionsSection = Field(default_factory=MotionsSection)
+    sim: SimSection = Field(default_factory=SimSection)
+    env: EnvSection = Field(default_factory=EnvSection)
 
     @model_validator(mode="before")
     @classmethod

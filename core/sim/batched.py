@@ -11,6 +11,7 @@ A backend for another engine (e.g. a GPU one) implements the same four things: `
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import mujoco
@@ -120,6 +121,7 @@ class BatchedSim:
         }
         self.state = SimState(**{k: torch.from_numpy(v) for k, v in self._buf.items()})
         self.bad_count = 0
+        self.seconds = {"physics": 0.0, "gather": 0.0}  # cumulative, for `retarget bench env`
         # Simulation time never restarts in our hands, so an auto-reset by MuJoCo (which sets
         # time to 0) is always visible, even in an env's first step.
         self._time[:] = 1.0
@@ -133,7 +135,9 @@ class BatchedSim:
         a meaningful state). State is gathered afterwards."""
         self._ctrl[:] = action.numpy() if isinstance(action, torch.Tensor) else action
         before = self._time.copy()
+        t0 = time.perf_counter()
         self.batch.step(nstep=self.settings.substeps)
+        t1 = time.perf_counter()
         # MuJoCo resets a blown-up env to the model defaults (time restarts) in any substep
         expected = before + self.settings.substeps * self.settings.timestep
         bad = self._time < expected - 0.5 * self.settings.timestep
@@ -141,6 +145,8 @@ class BatchedSim:
         bad |= (np.abs(self._qvel) > HUGE_VELOCITY).any(axis=1)
         self.bad_count += int(bad.sum())
         self.gather()
+        self.seconds["physics"] += t1 - t0
+        self.seconds["gather"] += time.perf_counter() - t1
         return bad
 
     def reset(self, env_ids: np.ndarray, qpos: np.ndarray, qvel: np.ndarray | None = None) -> None:

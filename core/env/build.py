@@ -1,0 +1,61 @@
+"""Building a :class:`RetargetEnv` from a resolved recipe."""
+
+from __future__ import annotations
+
+from retarget.env.env import EnvOptions, RetargetEnv
+from retarget.kinds import Character, Observer, RewardTerm, Scene, Sensor, Termination
+from retarget.motion.sources import load_motions
+from retarget.recipe import ResolvedRecipe
+from retarget.sim import SimSettings
+
+
+def env_from_recipe(
+    resolved: ResolvedRecipe, *, num_envs: int | None = None, threads: int | None = None
+) -> RetargetEnv:
+    """Instantiate every component of ``resolved``, load its motions and build the env."""
+    recipe = resolved.recipe
+
+    def made(kind: str) -> list:
+        return [c.instantiate() for c in resolved.of_kind(kind)]
+
+    character = resolved.character.instantiate()
+    assert isinstance(character, Character)
+    scenes = made("scene")
+    rewards = {
+        path.split(".", 1)[1]: comp.instantiate()
+        for path, comp in resolved.components.items()
+        if comp.entry.kind == "reward"
+    }
+    terminations = {
+        path.split(".", 1)[1]: comp.instantiate()
+        for path, comp in resolved.components.items()
+        if comp.entry.kind == "termination"
+    }
+    sim = SimSettings(
+        control_hz=recipe.sim.control_hz,
+        substeps=recipe.sim.substeps,
+        threads=recipe.sim.threads if threads is None else threads,
+    )
+    options = EnvOptions(
+        num_envs=recipe.env.num_envs if num_envs is None else num_envs,
+        sim=sim,
+        seed=recipe.seed,
+        privileged_offsets=tuple(recipe.env.privileged_offsets),
+        reset_lift=recipe.env.reset_lift,
+    )
+    clips = load_motions(recipe.motions.path)
+    sensors: list[Sensor] = made("sensor")
+    observers: list[Observer] = made("observer")
+    scene: Scene | None = scenes[0] if scenes else None
+    assert all(isinstance(r, RewardTerm) for r in rewards.values())
+    assert all(isinstance(t, Termination) for t in terminations.values())
+    return RetargetEnv(
+        character,
+        clips,
+        sensors=sensors,
+        observers=observers,
+        rewards=rewards,
+        terminations=terminations,
+        scene=scene,
+        options=options,
+    )

@@ -1,0 +1,249 @@
+"""``RetargetEnv``: N simulated characters tracking human motion, as a ``VecEnv``.
+
+One control step, in order (DESIGN.md §5):
+
+1. actions in [-1, 1] become torques (actuator gear = per-joint limit) for ``substeps``
+   physics steps (:class:`~retarget.sim.BatchedSim`);
+2. every environment's reference advances one frame (the library is at the control rate);
+3. a frozen :class:`~retarget.state.StepContext` is built: sim state, reference pose,
+   device window, contact labels, privileged future frames;
+4. rewards (weighted sum, per-term logs), terminations (failure vs time-out; a clip's end is
+   a time-out), failure penalties;
+5. observations of every group for all environments; their rows for finished environments
+   are returned as ``info["final_obs"]`` (to bootstrap time-outs);
+6. finished environments restart from random reference frames (RSI) and their observation
+   rows are recomputed.
+
+Environments whose physics blew up are flagged by ``BatchedSim``; they end as failures with a
+zero reward and are counted in ``info["nan_resets"]``: no NaN reaches an observation or a
+reward.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import torch
+
+from retarget.env.managers import RewardManager, TerminationManager
+from retarget.env.observations import (
+    FUTURE_POS,
+    privileged,
+    privileged_size,
+    proprio,
+    proprio_size,
+)
+from retarget.env.reference import CharacterReference
+from retarget.kinds import Character, Observer, RewardTerm, Scene, Sensor, Termination
+from retarget.motion.clip import MotionClip
+from retarget.motion.library import MotionLibrary
+from retarget.motion.resample import resample
+from retarget.sim import BatchedSim, SimSettings
+from retarget.state import ReferenceBatch, StepContext
+from retarget.world import build_world
+
+
+@dataclass(frozen=True)
+class EnvOptions:
+    """Environment settings that are not plugins."""
+
+    num_envs: int = 64
+    sim: SimSettings = field(default_factory=SimSettings)
+    seed: int = 0
+    privileged_offsets: tuple[int, ...] = (1, 3, 6)
+    reset_lift: float = 0.02  # metres the root is raised at RSI: kinematic feet penetrate a bit
+    groups: Mapping[str, Sequence[str]] | None = None  # None: actor/critic defaults
+
+
+class RetargetEnv:
+    """Physics tracking environment over a batch of ``num_envs`` worlds (see module doc)."""
+
+    def __init__(
+        self,
+        character: Character,
+        clips: Sequence[MotionClip],
+        *,
+        sensors: Sequence[Sensor] = (),
+        observers: Sequence[Observer] = (),
+        rewards: Mapping[str, RewardTerm] | None = None,
+        terminations: Mapping[str, Termination] | None = None,
+        scene: Scene | None = None,
+        options: EnvOptions | None = None,
+    ) -> None:
+        self.options = opts = options or EnvOptions()
+        self.num_envs = n = opts.num_envs
+        self.character, self.scene = character, scene
+        self.world = build_world(character, scene)
+        self.layout = layout = self.world.layout
+        hz = opts.sim.control_hz
+        clips = [resample(c, hz) for c in clips]
+        self.library = MotionLibrary(clips, fps=hz)
+        self.reference = CharacterReference(character, self.world.model, layout, clips)
+        self.sim = BatchedSim(self.world.model, layout, n, opts.sim)
+        self.sensors, self.observers = list(sensors), list(observers)
+        for plugin in (*self.sensors, *self.observers):
+            plugin.bind(layout)
+        self.rewards = RewardManager(rewards or {}, n)
+        for term in self.rewards.terms.values():
+            term.bind(layout)
+        self.terminations = TerminationManager(terminations or {})
+        for term in self.terminations.terms.values():
+            term.bind(layout)
+        past = max([s.frames_needed()[0] for s in self.sensors] + [0])
+        future = max([s.frames_needed()[1] for s in self.sensors] + [0])
+        self.window_offsets = tuple(range(-past, future + 1))
+        self._sources = self._observation_sources()
+        self.groups = {k: list(v) for k, v in (opts.groups or self._default_groups()).items()}
+        self.obs_dims = {
+            g: sum(self._sources[s][1] for s in names) for g, names in self.groups.items()
+        }
+        self.action_dim = layout.nu
+        self.generator = torch.Generator().manual_seed(opts.seed)
+        self.clip = torch.zeros(n, dtype=torch.long)
+        self.frame = torch.zeros(n, dtype=torch.long)
+        self.episode_step = torch.zeros(n, dtype=torch.long)
+        self.episode_return = torch.zeros(n)
+        self.prev_action = torch.zeros(n, layout.nu)
+        self.nan_resets = 0
+        self.seconds = dict.fromkeys(
+            ("reference", "rewards", "terminations", "observations", "resets"), 0.0
+        )
+        self._ctx: StepContext | None = None
+
+    # ------------------------------------------------------------------ observations
+
+    def _observation_sources(self) -> dict[str, tuple[object, int]]:
+        layout = self.layout
+        frames = len(self.options.privileged_offsets)
+        sources: dict[str, tuple[object, int]] = {
+            "proprio": (proprio, proprio_size(layout)),
+            "privileged": (privileged, privileged_size(layout, frames)),
+        }
+        for plugin in (*self.sensors, *self.observers):
+            sources[plugin.name] = (plugin.observe, plugin.spec(layout).size)
+        return sources
+
+    def _default_groups(self) -> dict[str, list[str]]:
+        actor = [s.name for s in self.sensors] + ["proprio"] + [o.name for o in self.observers]
+        return {"actor": actor, "critic": [*actor, "privileged"]}
+
+    def observe(self, ctx: StepContext) -> dict[str, torch.Tensor]:
+        """Every group's ``(N, D)`` observation; each source is computed once per step."""
+        cache: dict[str, torch.Tensor] = {}
+        out = {}
+        for group, names in self.groups.items():
+            parts = []
+            for name in names:
+                if name not in cache:
+                    fn = self._sources[name][0]
+                    cache[name] = fn(ctx).reshape(ctx.num_envs, -1)  # type: ignore[operator]
+                parts.append(cache[name])
+            out[group] = torch.nan_to_num(torch.cat(parts, dim=-1), 0.0, 0.0, 0.0)
+        return out
+
+    # ------------------------------------------------------------------ reference
+
+    def _context(self, action: torch.Tensor) -> StepContext:
+        lib = self.library
+        rows = lib.rows(self.clip, self.frame)[:, 0]
+        devices = lib.devices[lib.rows(self.clip, self.frame, self.window_offsets)]
+        future = lib.rows(self.clip, self.frame, self.options.privileged_offsets)
+        ref = ReferenceBatch(
+            pose=self.reference.pose(rows),
+            devices=devices,
+            window_offsets=self.window_offsets,
+            contacts=lib.contacts[rows],
+            extras={FUTURE_POS: self.reference.arrays["body_pos"][future]},
+        )
+        return StepContext(
+            layout=self.layout,
+            sim=self.sim.state,
+            ref=ref,
+            action=action,
+            prev_action=self.prev_action,
+            episode_step=self.episode_step,
+            dt=self.options.sim.control_dt,
+            scene=self.scene,
+        )
+
+    # ------------------------------------------------------------------ resets
+
+    def _reset_envs(self, env_ids: torch.Tensor) -> None:
+        """Reference state initialisation: random (clip, frame), the kinematic pose there."""
+        if env_ids.numel() == 0:
+            return
+        clip, frame = self.library.sample(int(env_ids.numel()), self.generator, margin=2)
+        self.clip[env_ids], self.frame[env_ids] = clip, frame
+        rows = self.library.rows(clip, frame)[:, 0].numpy()
+        qpos = self.reference.qpos64[rows].copy()
+        qpos[:, 2] += self.options.reset_lift
+        self.sim.reset(env_ids.numpy(), qpos, self.reference.qvel64[rows])
+        self.episode_step[env_ids] = 0
+        self.episode_return[env_ids] = 0.0
+        self.prev_action[env_ids] = 0.0
+        self.terminations.reset(env_ids)
+        for plugin in (*self.sensors, *self.observers):
+            plugin.reset(env_ids)
+
+    def reset(self) -> dict[str, torch.Tensor]:
+        self._reset_envs(torch.arange(self.num_envs))
+        self._ctx = self._context(torch.zeros(self.num_envs, self.action_dim))
+        return self.observe(self._ctx)
+
+    # ------------------------------------------------------------------ stepping
+
+    def step(self, action: torch.Tensor):
+        action = torch.as_tensor(action, dtype=torch.float32).clamp(-1.0, 1.0)
+        bad = torch.from_numpy(self.sim.step(action))
+        sec, t0 = self.seconds, time.perf_counter()
+        self.frame, clip_end = self.library.advance(self.clip, self.frame)
+        self.episode_step += 1
+        ctx = self._context(action)
+        t1 = time.perf_counter()
+        reward = self.rewards.compute(ctx)
+        t2 = time.perf_counter()
+        failed, timed_out = self.terminations.check(ctx)
+        t3 = time.perf_counter()
+        failed |= bad
+        timed_out = (timed_out | clip_end) & ~failed
+        reward = reward + self.rewards.penalize(failed)
+        reward = torch.where(bad, torch.zeros_like(reward), torch.nan_to_num(reward))
+        self.episode_return += reward
+        obs = self.observe(ctx)
+        t4 = time.perf_counter()
+        done = failed | timed_out
+        ids = done.nonzero().flatten()
+        info: dict = {"nan_resets": int(bad.sum())}
+        self.nan_resets += info["nan_resets"]
+        self.prev_action = action.clone()
+        if ids.numel():
+            info["final_obs"] = {g: v.clone() for g, v in obs.items()}
+            info["episode"] = {
+                "return": self.episode_return[ids].clone(),
+                "length": self.episode_step[ids].clone(),
+                "terms": self.rewards.pop_episodes(ids),
+            }
+            self._reset_envs(ids)
+            fresh = self.observe(self._context(self.prev_action).select(ids))
+            for g in obs:
+                obs[g][ids] = fresh[g]
+        t5 = time.perf_counter()
+        sec["reference"] += t1 - t0
+        sec["rewards"] += t2 - t1
+        sec["terminations"] += t3 - t2
+        sec["observations"] += t4 - t3
+        sec["resets"] += t5 - t4
+        return obs, reward, failed, timed_out, info
+
+    @property
+    def termination_counts(self) -> dict[str, int]:
+        return dict(self.terminations.counts)
+
+
+def random_actions(
+    env: RetargetEnv, generator: torch.Generator, scale: float = 1.0
+) -> torch.Tensor:
+    """Uniform actions in ``[-scale, scale]`` for every environment (benchmarks, smoke tests)."""
+    return (torch.rand(env.num_envs, env.action_dim, generator=generator) * 2 - 1) * scale

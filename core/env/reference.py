@@ -1,0 +1,114 @@
+"""The kinematic reference of one character over a motion library, precomputed once.
+
+Every library frame gets the kinematically retargeted character pose (``qpos``), its
+velocities (finite differences at the control rate) and the world poses of the bodies and role
+sites (MuJoCo forward kinematics). At run time a step's reference is pure indexing into these
+flat arrays with the library's ``(N,)`` row indices: no kinematics and no loops per step.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import mujoco
+import numpy as np
+import torch
+
+from retarget.errors import PluginError
+from retarget.kinds import Character
+from retarget.kinematic import retarget_clip
+from retarget.motion.clip import MotionClip
+from retarget.sim.batched import body_velocities
+from retarget.state import Layout, SimState
+
+
+def _velocities(model: mujoco.MjModel, qpos: np.ndarray, fps: float) -> np.ndarray:
+    """``qvel`` of a pose sequence by central differences (one-sided at the ends)."""
+    t = len(qpos)
+    qvel = np.zeros((t, model.nv))
+    if t < 2:
+        return qvel
+    for i in range(t):  # preprocessing, once per frame of the library
+        a, b = max(i - 1, 0), min(i + 1, t - 1)
+        mujoco.mj_differentiatePos(model, qvel[i], (b - a) / fps, qpos[a], qpos[b])
+    return qvel
+
+
+class CharacterReference:
+    """Flat per-frame reference arrays of ``character`` for ``clips`` (in library order)."""
+
+    def __init__(
+        self,
+        character: Character,
+        model: mujoco.MjModel,
+        layout: Layout,
+        clips: Sequence[MotionClip],
+    ) -> None:
+        joint_map = character.joint_map()
+        if joint_map is None:
+            raise PluginError(
+                "has no joint map, so human motion cannot be retargeted onto it",
+                plugin=f"character {character.name}",
+            )
+        qpos_parts, qvel_parts = [], []
+        for clip in clips:
+            motion = retarget_clip(clip, model, joint_map)
+            qpos_parts.append(motion.qpos)
+            qvel_parts.append(_velocities(model, motion.qpos, clip.fps))
+        qpos = np.concatenate(qpos_parts)
+        qvel = np.concatenate(qvel_parts)
+        frames = len(qpos)
+        bodies = np.asarray(layout.body_ids)
+        sites = np.asarray(layout.site_ids)
+        arrays = {
+            "body_pos": np.zeros((frames, len(bodies), 3)),
+            "body_quat": np.zeros((frames, len(bodies), 4)),
+            "body_linvel": np.zeros((frames, len(bodies), 3)),
+            "body_angvel": np.zeros((frames, len(bodies), 3)),
+            "site_pos": np.zeros((frames, len(sites), 3)),
+            "site_quat": np.zeros((frames, len(sites), 4)),
+        }
+        data = mujoco.MjData(model)
+        roots = model.body_rootid[bodies]
+        cvel = np.zeros((frames, len(bodies), 6))
+        com = np.zeros((frames, len(bodies), 3))
+        for f in range(frames):  # preprocessing: forward kinematics of every library frame
+            data.qpos[:] = qpos[f]
+            data.qvel[:] = qvel[f]
+            mujoco.mj_kinematics(model, data)
+            mujoco.mj_comPos(model, data)
+            mujoco.mj_comVel(model, data)
+            arrays["body_pos"][f] = data.xpos[bodies]
+            arrays["body_quat"][f] = data.xquat[bodies]
+            cvel[f] = data.cvel[bodies]
+            com[f] = data.subtree_com[roots]
+            arrays["site_pos"][f] = data.site_xpos[sites]
+            for k, s in enumerate(sites):
+                mujoco.mju_mat2Quat(arrays["site_quat"][f, k], data.site_xmat[s])
+        ang, lin = body_velocities(cvel, arrays["body_pos"], com)
+        arrays["body_angvel"], arrays["body_linvel"] = ang, lin
+        f32 = torch.float32
+        self.qpos = torch.as_tensor(qpos, dtype=f32)
+        self.qvel = torch.as_tensor(qvel, dtype=f32)
+        self.qpos64 = qpos  # exact poses for resets (RSI)
+        self.qvel64 = qvel
+        self.arrays = {k: torch.as_tensor(v, dtype=f32) for k, v in arrays.items()}
+
+    @property
+    def num_frames(self) -> int:
+        return int(self.qpos.shape[0])
+
+    def pose(self, rows: torch.Tensor) -> SimState:
+        """The reference state at flat library rows ``(N,)`` (contact forces are zero)."""
+        a = self.arrays
+        return SimState(
+            qpos=self.qpos[rows],
+            qvel=self.qvel[rows],
+            body_pos=a["body_pos"][rows],
+            body_quat=a["body_quat"][rows],
+            body_linvel=a["body_linvel"][rows],
+            body_angvel=a["body_angvel"][rows],
+            site_pos=a["site_pos"][rows],
+            site_quat=a["site_quat"][rows],
+            contact_force=torch.zeros(rows.shape[0], a["body_pos"].shape[1]),
+        )
