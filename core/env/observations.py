@@ -29,7 +29,10 @@ def proprio(ctx: StepContext) -> torch.Tensor:
     root_pos, root_quat = s.qpos[:, :3], s.qpos[:, 3:7]
     n = ctx.num_envs
     tilt = quat_to_6d(to_heading_quats(root_quat[:, None], root_quat))[:, 0]
-    root_vel = to_heading_vectors(torch.stack([s.qvel[:, :3], s.qvel[:, 3:6]], 1), root_quat)
+    # free joint: linear velocity in the world frame, angular velocity in the body frame
+    root_vel = torch.cat(
+        [to_heading_vectors(s.qvel[:, None, :3], root_quat), s.qvel[:, None, 3:6]], 1
+    )
     body_pos = to_heading_points(s.body_pos, root_pos, root_quat, keep_height=False)
     body_rot = quat_to_6d(to_heading_quats(s.body_quat, root_quat))
     body_vel = to_heading_vectors(torch.cat([s.body_linvel, s.body_angvel], dim=1), root_quat)
