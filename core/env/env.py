@@ -9,10 +9,10 @@ One control step, in order (DESIGN.md §5):
    device window, contact labels, privileged future frames;
 4. rewards (weighted sum, per-term logs), terminations (failure vs time-out; a clip's end is
    a time-out), failure penalties;
-5. observations of every group for all environments; their rows for finished environments
-   are returned as ``info["final_obs"]`` (to bootstrap time-outs);
-6. finished environments restart from random reference frames (RSI) and their observation
-   rows are recomputed.
+5. if any environment timed out, the observations it ended in are returned as
+   ``info["final_obs"]`` (PPO bootstraps time-outs from them; failures need none);
+6. finished environments restart from random reference frames (RSI), then every group's
+   observation is computed once for all environments.
 
 Environments whose physics blew up are flagged by ``BatchedSim``; they end as failures with a
 zero reward and are counted in ``info["nan_resets"]``: no NaN reaches an observation or a
@@ -211,7 +211,6 @@ class RetargetEnv:
         reward = reward + self.rewards.penalize(failed)
         reward = torch.where(bad, torch.zeros_like(reward), torch.nan_to_num(reward))
         self.episode_return += reward
-        obs = self.observe(ctx)
         t4 = time.perf_counter()
         done = failed | timed_out
         ids = done.nonzero().flatten()
@@ -219,22 +218,24 @@ class RetargetEnv:
         self.nan_resets += info["nan_resets"]
         self.prev_action = action.clone()
         if ids.numel():
-            info["final_obs"] = {g: v.clone() for g, v in obs.items()}
+            if timed_out.any():  # only time-outs bootstrap from the observation they ended in
+                info["final_obs"] = self.observe(ctx)
             info["episode"] = {
                 "return": self.episode_return[ids].clone(),
                 "length": self.episode_step[ids].clone(),
                 "terms": self.rewards.pop_episodes(ids),
             }
             self._reset_envs(ids)
-            fresh = self.observe(self._context(self.prev_action).select(ids))
-            for g in obs:
-                obs[g][ids] = fresh[g]
+            ctx = self._context(self.prev_action)
         t5 = time.perf_counter()
+        obs = self.observe(ctx)
+        t6 = time.perf_counter()
         sec["reference"] += t1 - t0
         sec["rewards"] += t2 - t1
         sec["terminations"] += t3 - t2
-        sec["observations"] += t4 - t3
+        sec["observations"] += t6 - t5
         sec["resets"] += t5 - t4
+        sec["terminations"] += t4 - t3
         return obs, reward, failed, timed_out, info
 
     @property

@@ -162,27 +162,29 @@ class BatchedSim:
         self._qvel[env_ids] = 0.0 if qvel is None else qvel
         self._ctrl[env_ids] = 0.0
         self.batch.forward(env_ids)
-        self.gather()
+        self.gather(env_ids)
 
     # ------------------------------------------------------------------ gathering
 
-    def gather(self) -> None:
-        """Copy this step's state into the float32 buffers behind ``self.state``."""
+    def gather(self, env_ids: np.ndarray | None = None) -> None:
+        """Copy this step's state (of ``env_ids``, default all) into the float32 buffers
+        behind ``self.state``."""
+        rows: slice | np.ndarray = slice(None) if env_ids is None else env_ids
+        sel = np.ix_(np.arange(self.num_envs)[rows], self._bodies)
         buf = self._buf
-        buf["qpos"][:] = self._qpos
-        buf["qvel"][:] = self._qvel
-        buf["body_pos"][:] = self._xpos[:, self._bodies]
-        buf["body_quat"][:] = self._xquat[:, self._bodies]
-        ang, lin = body_velocities(
-            self._cvel[:, self._bodies],
-            self._xpos[:, self._bodies],
-            self._subtree_com[:, self._tree_roots],
-        )
-        buf["body_angvel"][:] = ang
-        buf["body_linvel"][:] = lin
-        buf["site_pos"][:] = self._site_xpos[:, self._sites]
-        buf["site_quat"][:] = self._site_xquat[:, self._sites]
-        buf["contact_force"][:] = np.linalg.norm(self._cfrc[:, self._bodies, 3:], axis=-1)
+        buf["qpos"][rows] = self._qpos[rows]
+        buf["qvel"][rows] = self._qvel[rows]
+        xpos = self._xpos[sel]
+        buf["body_pos"][rows] = xpos
+        buf["body_quat"][rows] = self._xquat[sel]
+        roots = np.ix_(np.arange(self.num_envs)[rows], self._tree_roots)
+        ang, lin = body_velocities(self._cvel[sel], xpos, self._subtree_com[roots])
+        buf["body_angvel"][rows] = ang
+        buf["body_linvel"][rows] = lin
+        sites = np.ix_(np.arange(self.num_envs)[rows], self._sites)
+        buf["site_pos"][rows] = self._site_xpos[sites]
+        buf["site_quat"][rows] = self._site_xquat[sites]
+        buf["contact_force"][rows] = np.linalg.norm(self._cfrc[sel][..., 3:], axis=-1)
 
     def raw(self, field: str) -> np.ndarray:
         """The live ``(N, ...)`` MuJoCo array of ``field`` (tests and backends use this)."""
