@@ -7,7 +7,7 @@ import re
 from retarget.cli.main import main
 
 
-def test_bench_env_prints_rates_and_ratio(capsys) -> None:  # noqa: ANN001
+def test_bench_env_prints_rates_and_ratio(capsys) -> None:
     code = main(
         ["bench", "env", "--num-envs", "4", "--threads", "1", "--seconds", "0.3", "--blocks", "1"]
     )
