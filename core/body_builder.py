@@ -122,8 +122,9 @@ class Dof:
         if self.axis not in AXES:
             raise ValueError(f"hinge axis must be one of x, y, z, got {self.axis!r}")
         if not self.lower < self.upper:
-            raise ValueError(f"hinge limits must satisfy lower < upper, got {self.lower}, "
-                             f"{self.upper}")
+            raise ValueError(
+                f"hinge limits must satisfy lower < upper, got {self.lower}, {self.upper}"
+            )
 
 
 @dataclass(frozen=True)
@@ -151,21 +152,30 @@ class Joint:
         return tuple(f"{self.name}_{d.axis}" for d in self.dofs)
 
 
-def hinge(name: str, axis: str, lower: float, upper: float, torque: float = 0.0,
-          **passive: float) -> Joint:
+def hinge(
+    name: str, axis: str, lower: float, upper: float, torque: float = 0.0, **passive: float
+) -> Joint:
     """A 1-DoF joint (elbow, knee, tail segment pitch)."""
     return Joint(name, (Dof(axis, lower, upper),), torque, **passive)
 
 
-def ball(name: str, x: tuple[float, float], y: tuple[float, float], z: tuple[float, float],
-         torque: float = 0.0, order: str = "xyz", **passive: float) -> Joint:
+def ball(
+    name: str,
+    x: tuple[float, float],
+    y: tuple[float, float],
+    z: tuple[float, float],
+    torque: float = 0.0,
+    order: str = "xyz",
+    **passive: float,
+) -> Joint:
     """A 3-DoF joint as three hinges (limits in degrees per axis, applied in ``order``)."""
     limits = {"x": x, "y": y, "z": z}
     return Joint(name, tuple(Dof(a, *limits[a]) for a in order), torque, **passive)
 
 
-def joint(name: str, limits: Mapping[str, tuple[float, float]], torque: float = 0.0,
-          **passive: float) -> Joint:
+def joint(
+    name: str, limits: Mapping[str, tuple[float, float]], torque: float = 0.0, **passive: float
+) -> Joint:
     """A joint with the hinges named in ``limits`` (insertion order = rotation order)."""
     return Joint(name, tuple(Dof(a, lo, hi) for a, (lo, hi) in limits.items()), torque, **passive)
 
@@ -228,11 +238,16 @@ class BodyBuilder:
         built = b.build(mass=20.0)   # a BuiltCharacter; built.spec is the MjSpec
     """
 
-    def __init__(self, name: str, *, timestep: float = DEFAULT_TIMESTEP,
-                 rgba: tuple[float, float, float, float] = (0.7, 0.6, 0.5, 1.0),
-                 damping_per_nm: float = DAMPING_PER_NM,
-                 armature_per_nm: float = ARMATURE_PER_NM,
-                 passive_armature: float = PASSIVE_ARMATURE) -> None:
+    def __init__(
+        self,
+        name: str,
+        *,
+        timestep: float = DEFAULT_TIMESTEP,
+        rgba: tuple[float, float, float, float] = (0.7, 0.6, 0.5, 1.0),
+        damping_per_nm: float = DAMPING_PER_NM,
+        armature_per_nm: float = ARMATURE_PER_NM,
+        passive_armature: float = PASSIVE_ARMATURE,
+    ) -> None:
         self.name = name
         self.timestep = timestep
         self.damping_per_nm = damping_per_nm
@@ -244,8 +259,13 @@ class BodyBuilder:
 
     # -- description -------------------------------------------------------------------------
 
-    def root(self, name: str, pos: Vec3, geoms: Iterable[Geom],
-             rgba: tuple[float, float, float, float] | None = None) -> None:
+    def root(
+        self,
+        name: str,
+        pos: Vec3,
+        geoms: Iterable[Geom],
+        rgba: tuple[float, float, float, float] | None = None,
+    ) -> None:
         """The root body (free joint ``root``); ``pos`` is its rest position (z is adjusted so
         the lowest geom touches the floor)."""
         if self._root is not None:
@@ -253,9 +273,15 @@ class BodyBuilder:
         self._root = name
         self._add(_BodyRecord(name, None, pos, tuple(geoms), None, rgba or self.rgba))
 
-    def body(self, name: str, parent: str, pos: Vec3, geoms: Iterable[Geom],
-             joint: Joint | None = None,
-             rgba: tuple[float, float, float, float] | None = None) -> None:
+    def body(
+        self,
+        name: str,
+        parent: str,
+        pos: Vec3,
+        geoms: Iterable[Geom],
+        joint: Joint | None = None,
+        rgba: tuple[float, float, float, float] | None = None,
+    ) -> None:
         """A child body at ``pos`` in its parent's frame; ``joint=None`` welds it to the parent."""
         if parent not in self._bodies:
             raise ValueError(f"body {name!r}: unknown parent {parent!r}")
@@ -292,18 +318,29 @@ class BodyBuilder:
         # passive joints' effective inertia at rest for their spring-damper gains.
         spec, joints = self._make_spec(density, lift=-low, passive_gains=None)
         model = spec.compile()
-        params = {h: (r.joint.frequency, r.joint.damping_ratio)
-                  for r in self._bodies.values() if r.joint is not None and r.joint.passive
-                  for h in r.joint.hinge_names()}
+        params = {
+            h: (r.joint.frequency, r.joint.damping_ratio)
+            for r in self._bodies.values()
+            if r.joint is not None and r.joint.passive
+            for h in r.joint.hinge_names()
+        }
         gains = _passive_gains(model, params, self.passive_armature)
         spec, joints = self._make_spec(density, lift=-low, passive_gains=gains)
         model = spec.compile()
-        return BuiltCharacter(spec=spec, joints=joints, density=density,
-                              mass=float(model.body_mass.sum()), height=high - low)
+        return BuiltCharacter(
+            spec=spec,
+            joints=joints,
+            density=density,
+            mass=float(model.body_mass.sum()),
+            height=high - low,
+        )
 
-    def _make_spec(self, density: float, lift: float,
-                   passive_gains: Mapping[str, tuple[float, float, float, float]] | None
-                   ) -> tuple[mujoco.MjSpec, dict[str, JointInfo]]:
+    def _make_spec(
+        self,
+        density: float,
+        lift: float,
+        passive_gains: Mapping[str, tuple[float, float, float, float]] | None,
+    ) -> tuple[mujoco.MjSpec, dict[str, JointInfo]]:
         spec = mujoco.MjSpec()
         spec.modelname = self.name
         spec.compiler.degree = False
@@ -324,42 +361,71 @@ class BodyBuilder:
             for i, g in enumerate(rec.geoms):
                 _add_geom(body, f"{rec.name}_geom{i}", g, density, rec.rgba)
             for sname, spos, ssize in rec.sites:
-                body.add_site(name=sname, pos=list(spos), size=[ssize, 0, 0],
-                              rgba=[1.0, 0.2, 0.2, 0.6], group=4)
+                body.add_site(
+                    name=sname,
+                    pos=list(spos),
+                    size=[ssize, 0, 0],
+                    rgba=[1.0, 0.2, 0.2, 0.6],
+                    group=4,
+                )
             if rec.joint is not None:
-                joints[rec.joint.name] = _add_joint(spec, body, rec.joint, passive_gains,
-                                                    self.damping_per_nm, self.armature_per_nm)
+                joints[rec.joint.name] = _add_joint(
+                    spec, body, rec.joint, passive_gains, self.damping_per_nm, self.armature_per_nm
+                )
         return spec, joints
 
 
-def _add_geom(body: mujoco.MjsBody, name: str, g: Geom, density: float,
-              rgba: Sequence[float]) -> None:
-    kw: dict[str, object] = dict(name=name, density=density, rgba=list(rgba),
-                                 contype=CHARACTER_CONTYPE, conaffinity=CHARACTER_CONAFFINITY,
-                                 condim=3, friction=[1.0, 0.05, 0.01])
+def _add_geom(
+    body: mujoco.MjsBody, name: str, g: Geom, density: float, rgba: Sequence[float]
+) -> None:
+    kw: dict[str, object] = dict(
+        name=name,
+        density=density,
+        rgba=list(rgba),
+        contype=CHARACTER_CONTYPE,
+        conaffinity=CHARACTER_CONAFFINITY,
+        condim=3,
+        friction=[1.0, 0.05, 0.01],
+    )
     if isinstance(g, Capsule):
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_CAPSULE, fromto=[*g.start, *g.end],
-                      size=[g.radius, 0, 0], **kw)
+        body.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_CAPSULE,
+            fromto=[*g.start, *g.end],
+            size=[g.radius, 0, 0],
+            **kw,
+        )
     elif isinstance(g, Sphere):
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, pos=list(g.center),
-                      size=[g.radius, 0, 0], **kw)
+        body.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_SPHERE, pos=list(g.center), size=[g.radius, 0, 0], **kw
+        )
     elif isinstance(g, Box):
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_BOX, pos=list(g.center),
-                      size=list(g.half_size), **kw)
+        body.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_BOX, pos=list(g.center), size=list(g.half_size), **kw
+        )
     elif isinstance(g, Ellipsoid):
-        body.add_geom(type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, pos=list(g.center),
-                      size=list(g.radii), **kw)
+        body.add_geom(
+            type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, pos=list(g.center), size=list(g.radii), **kw
+        )
     else:  # pragma: no cover - the Geom union is closed
         raise TypeError(f"unknown geom {g!r}")
 
 
-def _add_joint(spec: mujoco.MjSpec, body: mujoco.MjsBody, j: Joint,
-               passive_gains: Mapping[str, tuple[float, float, float, float]] | None,
-               damping_per_nm: float, armature_per_nm: float) -> JointInfo:
+def _add_joint(
+    spec: mujoco.MjSpec,
+    body: mujoco.MjsBody,
+    j: Joint,
+    passive_gains: Mapping[str, tuple[float, float, float, float]] | None,
+    damping_per_nm: float,
+    armature_per_nm: float,
+) -> JointInfo:
     names = j.hinge_names()
     for hname, dof in zip(names, j.dofs, strict=True):
-        jh = body.add_joint(name=hname, type=mujoco.mjtJoint.mjJNT_HINGE, axis=list(AXES[dof.axis]),
-                            range=[math.radians(dof.lower), math.radians(dof.upper)])
+        jh = body.add_joint(
+            name=hname,
+            type=mujoco.mjtJoint.mjJNT_HINGE,
+            axis=list(AXES[dof.axis]),
+            range=[math.radians(dof.lower), math.radians(dof.upper)],
+        )
         jh.limited = mujoco.mjtLimited.mjLIMITED_TRUE
         if j.passive:
             k, c, ref, arm = (passive_gains or {}).get(hname, (1.0, 0.1, 0.0, 0.0))
@@ -370,20 +436,26 @@ def _add_joint(spec: mujoco.MjSpec, body: mujoco.MjsBody, j: Joint,
         else:
             jh.damping = [damping_per_nm * j.torque, 0.0, 0.0]
             jh.armature = armature_per_nm * j.torque
-            act = spec.add_actuator(name=hname, target=hname,
-                                    trntype=mujoco.mjtTrn.mjTRN_JOINT)
+            act = spec.add_actuator(name=hname, target=hname, trntype=mujoco.mjtTrn.mjTRN_JOINT)
             act.set_to_motor()
             act.gear = [j.torque, 0, 0, 0, 0, 0]
             act.ctrlrange = [-1.0, 1.0]
             act.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
             act.forcerange = [-j.torque, j.torque]
             act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
-    return JointInfo(name=j.name, body=body.name, hinges=names,
-                     axes=tuple(d.axis for d in j.dofs), passive=j.passive, torque=j.torque)
+    return JointInfo(
+        name=j.name,
+        body=body.name,
+        hinges=names,
+        axes=tuple(d.axis for d in j.dofs),
+        passive=j.passive,
+        torque=j.torque,
+    )
 
 
-def _passive_gains(model: mujoco.MjModel, params: Mapping[str, tuple[float, float]],
-                   armature: float) -> dict[str, tuple[float, float, float, float]]:
+def _passive_gains(
+    model: mujoco.MjModel, params: Mapping[str, tuple[float, float]], armature: float
+) -> dict[str, tuple[float, float, float, float]]:
     """Stiffness/damping per passive hinge from its effective inertia at the rest pose.
 
     ``params`` maps hinge name -> (frequency Hz, damping ratio). ``k = I w^2`` and
@@ -421,8 +493,9 @@ def _rest_extent(model: mujoco.MjModel) -> tuple[float, float]:
     return geom_z_extent(model, data)
 
 
-def geom_z_extent(model: mujoco.MjModel, data: mujoco.MjData,
-                  geoms: Sequence[int] | None = None) -> tuple[float, float]:
+def geom_z_extent(
+    model: mujoco.MjModel, data: mujoco.MjData, geoms: Sequence[int] | None = None
+) -> tuple[float, float]:
     """World z range covered by ``geoms`` (all by default) in the pose of ``data``."""
     ids = range(model.ngeom) if geoms is None else geoms
     lo, hi = math.inf, -math.inf

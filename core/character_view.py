@@ -37,24 +37,32 @@ def scene_with(specs: Sequence[tuple[str, mujoco.MjSpec]], spacing: float) -> mu
     world.visual.global_.offheight = 1200
     world.visual.headlight.ambient = [0.35, 0.35, 0.35]
     world.visual.headlight.diffuse = [0.5, 0.5, 0.5]
-    tex = world.add_texture(name="grid", type=mujoco.mjtTexture.mjTEXTURE_2D,
-                            builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, width=64, height=64,
-                            rgb1=[0.78, 0.8, 0.82], rgb2=[0.7, 0.72, 0.74])
+    tex = world.add_texture(
+        name="grid",
+        type=mujoco.mjtTexture.mjTEXTURE_2D,
+        builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+        width=64,
+        height=64,
+        rgb1=[0.78, 0.8, 0.82],
+        rgb2=[0.7, 0.72, 0.74],
+    )
     del tex
-    world.add_material(name="grid", texrepeat=[4, 4], texuniform=True,
-                       textures=["", "grid"])
-    world.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
-                             material="grid", rgba=list(FLOOR_RGBA))
-    world.worldbody.add_light(pos=[2, -2, 6], dir=[-0.3, 0.3, -1], diffuse=[0.6, 0.6, 0.6],
-                              castshadow=True)
+    world.add_material(name="grid", texrepeat=[4, 4], texuniform=True, textures=["", "grid"])
+    world.worldbody.add_geom(
+        type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], material="grid", rgba=list(FLOOR_RGBA)
+    )
+    world.worldbody.add_light(
+        pos=[2, -2, 6], dir=[-0.3, 0.3, -1], diffuse=[0.6, 0.6, 0.6], castshadow=True
+    )
     for i, (label, spec) in enumerate(specs):
         frame = world.worldbody.add_frame(pos=[0.0, -i * spacing, 0.0])
         world.attach(spec.copy(), prefix=f"{label}/", frame=frame)
     return world.compile()
 
 
-def fit_camera(model: mujoco.MjModel, data: mujoco.MjData, azimuth: float = 135.0,
-               elevation: float = -14.0) -> mujoco.MjvCamera:
+def fit_camera(
+    model: mujoco.MjModel, data: mujoco.MjData, azimuth: float = 135.0, elevation: float = -14.0
+) -> mujoco.MjvCamera:
     """A free camera looking at all non-world geoms from the front-left, framing them."""
     ids = [g for g in range(model.ngeom) if model.geom_bodyid[g] != 0]
     pts = data.geom_xpos[ids]
@@ -88,13 +96,21 @@ def ensure_offscreen() -> None:
     try:
         from mujoco.osmesa import GLContext
     except ImportError as exc:  # pragma: no cover - depends on system libraries
-        raise RetargetError("offscreen rendering needs OSMesa (apt-get install libosmesa6) "
-                            "or MUJOCO_GL=egl with a GPU") from exc
+        raise RetargetError(
+            "offscreen rendering needs OSMesa (apt-get install libosmesa6) "
+            "or MUJOCO_GL=egl with a GPU"
+        ) from exc
     gl_context.GLContext = GLContext
 
 
-def render(model: mujoco.MjModel, data: mujoco.MjData, cam: mujoco.MjvCamera,
-           width: int = 960, height: int = 720, sites: bool = False) -> np.ndarray:
+def render(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    cam: mujoco.MjvCamera,
+    width: int = 960,
+    height: int = 720,
+    sites: bool = False,
+) -> np.ndarray:
     """One RGB frame; the renderer is closed before returning (its GL context is freed)."""
     ensure_offscreen()
     opt = mujoco.MjvOption()
@@ -155,8 +171,9 @@ def save_image(image: np.ndarray, path: Path) -> None:
             h, w, _ = image.shape
             path.write_bytes(f"P6 {w} {h} 255\n".encode() + image.astype(np.uint8).tobytes())
             return
-        raise RetargetError(f"writing {path.suffix} needs Pillow (pip install pillow)",
-                            file=path) from exc
+        raise RetargetError(
+            f"writing {path.suffix} needs Pillow (pip install pillow)", file=path
+        ) from exc
     Image.fromarray(image).save(path)
 
 
@@ -170,19 +187,23 @@ def save_video(frames: Sequence[np.ndarray], path: Path, fps: float) -> None:
         try:
             from PIL import Image
         except ImportError as exc:
-            raise RetargetError("writing .gif needs Pillow (pip install pillow)",
-                                file=path) from exc
+            raise RetargetError(
+                "writing .gif needs Pillow (pip install pillow)", file=path
+            ) from exc
         imgs = [Image.fromarray(f) for f in frames]
-        imgs[0].save(path, save_all=True, append_images=imgs[1:],
-                     duration=round(1000 / fps), loop=0)
+        imgs[0].save(
+            path, save_all=True, append_images=imgs[1:], duration=round(1000 / fps), loop=0
+        )
         return
     if suffix == ".mp4":
         try:
             import imageio.v3 as iio
         except ImportError as exc:
-            raise RetargetError("writing .mp4 needs imageio with ffmpeg "
-                                "(pip install imageio imageio-ffmpeg)", file=path,
-                                hint="or write a .gif, which needs only Pillow") from exc
+            raise RetargetError(
+                "writing .mp4 needs imageio with ffmpeg (pip install imageio imageio-ffmpeg)",
+                file=path,
+                hint="or write a .gif, which needs only Pillow",
+            ) from exc
         iio.imwrite(path, np.stack(frames), fps=fps, codec="libx264")
         return
     raise RetargetError(f"unknown output format {suffix!r}; use .png, .gif or .mp4", file=path)

@@ -43,16 +43,21 @@ class JointLink(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     human: tuple[str, ...] = Field(
-        description="canonical human joint(s); several are composed parent first")
+        description="canonical human joint(s); several are composed parent first"
+    )
     axes: tuple[str, ...] | None = Field(
-        None, description="human axis per character hinge, e.g. ['y', '-z'] (default: same)")
+        None, description="human axis per character hinge, e.g. ['y', '-z'] (default: same)"
+    )
     scale: float = Field(1.0, description="factor applied to every angle")
     offset: tuple[float, ...] | None = Field(
-        None, description="degrees added per hinge after scaling (default 0)")
+        None, description="degrees added per hinge after scaling (default 0)"
+    )
     bend: str | None = Field(
-        None, description="bone axis (x, y or z) of the human joint: drive the first hinge by "
-                          "the bend angle between the bone before and after the rotation, "
-                          "signed by the first of `axes`; other hinges stay at 0")
+        None,
+        description="bone axis (x, y or z) of the human joint: drive the first hinge by "
+        "the bend angle between the bone before and after the rotation, "
+        "signed by the first of `axes`; other hinges stay at 0",
+    )
 
     @field_validator("bend")
     @classmethod
@@ -101,8 +106,9 @@ class JointMap(BaseModel):
 
     links: dict[str, JointLink] = Field(default_factory=dict)
 
-    def with_overrides(self, overrides: Mapping[str, JointLink | Mapping[str, Any] | None]
-                       ) -> JointMap:
+    def with_overrides(
+        self, overrides: Mapping[str, JointLink | Mapping[str, Any] | None]
+    ) -> JointMap:
         """A copy with some links replaced (a mapping) or removed (``None``).
 
         A mapping override is merged into the existing link, so a recipe can change only
@@ -119,13 +125,20 @@ class JointMap(BaseModel):
                 try:
                     links[name] = JointLink.model_validate({**base, **dict(value)})
                 except ValueError as exc:
-                    raise RecipeError(f"joint_map override for character joint '{name}': "
-                                      f"{exc}", field=f"joint_map.{name}") from None
+                    raise RecipeError(
+                        f"joint_map override for character joint '{name}': {exc}",
+                        field=f"joint_map.{name}",
+                    ) from None
         return JointMap(links=links)
 
-    def validate_against(self, human_joints: Sequence[str],
-                         character_joints: Mapping[str, Sequence[str]], *,
-                         passive: Iterable[str] = (), plugin: str | None = None) -> None:
+    def validate_against(
+        self,
+        human_joints: Sequence[str],
+        character_joints: Mapping[str, Sequence[str]],
+        *,
+        passive: Iterable[str] = (),
+        plugin: str | None = None,
+    ) -> None:
         """Check every name and arity; the error names the offending joint and the choices.
 
         ``character_joints`` maps character joint -> the axes of its hinges (``("y","z","x")``).
@@ -137,32 +150,44 @@ class JointMap(BaseModel):
             if cname not in character_joints:
                 raise RecipeError(
                     f"joint map names unknown character joint '{cname}'; known: "
-                    f"{', '.join(character_joints)}", field=f"joint_map.{cname}", plugin=plugin)
+                    f"{', '.join(character_joints)}",
+                    field=f"joint_map.{cname}",
+                    plugin=plugin,
+                )
             if cname in passive:
                 raise RecipeError(
                     f"joint map drives passive joint '{cname}' (passive joints follow physics "
-                    "only); remove it or make the joint active", field=f"joint_map.{cname}",
-                    plugin=plugin)
+                    "only); remove it or make the joint active",
+                    field=f"joint_map.{cname}",
+                    plugin=plugin,
+                )
             for h in link.human:
                 if h not in human_joints:
                     raise RecipeError(
                         f"joint map entry '{cname}' names unknown human joint '{h}'; known: "
-                        f"{', '.join(human_joints)}", field=f"joint_map.{cname}.human",
-                        plugin=plugin)
+                        f"{', '.join(human_joints)}",
+                        field=f"joint_map.{cname}.human",
+                        plugin=plugin,
+                    )
             n = len(character_joints[cname])
             if link.axes is not None and len(link.axes) != n:
                 raise RecipeError(
                     f"joint map entry '{cname}' gives {len(link.axes)} axes but the character "
                     f"joint has {n} hinge(s) ({', '.join(character_joints[cname])})",
-                    field=f"joint_map.{cname}.axes", plugin=plugin)
+                    field=f"joint_map.{cname}.axes",
+                    plugin=plugin,
+                )
             if link.offset is not None and len(link.offset) != n:
                 raise RecipeError(
                     f"joint map entry '{cname}' gives {len(link.offset)} offsets but the "
-                    f"character joint has {n} hinge(s)", field=f"joint_map.{cname}.offset",
-                    plugin=plugin)
+                    f"character joint has {n} hinge(s)",
+                    field=f"joint_map.{cname}.offset",
+                    plugin=plugin,
+                )
 
-    def hinge_angles(self, cname: str, hinge_axes: Sequence[str],
-                     local_rot: np.ndarray) -> np.ndarray:
+    def hinge_angles(
+        self, cname: str, hinge_axes: Sequence[str], local_rot: np.ndarray
+    ) -> np.ndarray:
         """Angles ``(T, k)`` (radians) of character joint ``cname`` from composed human rotations.
 
         ``local_rot`` is ``(T, 4)`` wxyz: the composition of the link's human joints.
@@ -214,5 +239,6 @@ def elbow_link(side: str, scale: float = 1.0, twist: bool = False) -> JointLink:
     ``twist=True`` for a character elbow with a second (forearm twist) hinge, left at 0.
     """
     flex = "-z" if side == "left" else "z"
-    return JointLink(human=(f"{side}_elbow",), bend="y",
-                     axes=(flex, "y") if twist else (flex,), scale=scale)
+    return JointLink(
+        human=(f"{side}_elbow",), bend="y", axes=(flex, "y") if twist else (flex,), scale=scale
+    )

@@ -61,8 +61,9 @@ def hinge_groups(model: mujoco.MjModel) -> dict[str, HingeGroup]:
         else:
             stems = {n.rsplit("_", 1)[0] for n in names}
             gname = stems.pop() if len(stems) == 1 else names[0]
-        groups[gname] = HingeGroup(gname, tuple(names), tuple(axes),
-                                   tuple(int(model.jnt_qposadr[j]) for j in ids))
+        groups[gname] = HingeGroup(
+            gname, tuple(names), tuple(axes), tuple(int(model.jnt_qposadr[j]) for j in ids)
+        )
     return groups
 
 
@@ -90,8 +91,9 @@ class KinematicMotion:
         return float(np.mean(list(self.clipped.values()))) if self.clipped else 0.0
 
 
-def retarget_clip(clip: MotionClip, model: mujoco.MjModel, joint_map: JointMap, *,
-                  root_scale: float | None = None) -> KinematicMotion:
+def retarget_clip(
+    clip: MotionClip, model: mujoco.MjModel, joint_map: JointMap, *, root_scale: float | None = None
+) -> KinematicMotion:
     """Kinematically retarget ``clip`` onto the character ``model`` (all frames at once)."""
     groups = hinge_groups(model)
     joint_map.validate_against(sk.JOINT_NAMES, {g.name: g.axes for g in groups.values()})
@@ -114,8 +116,9 @@ def retarget_clip(clip: MotionClip, model: mujoco.MjModel, joint_map: JointMap, 
             clipped[hname] = float(np.mean((a < lo) | (a > hi)))
             qpos[:, adr] = np.clip(a, lo, hi)
     if not np.all(np.isfinite(qpos)):
-        raise RecipeError(f"kinematic retargeting of clip '{clip.name}' produced non-finite "
-                          "joint angles")
+        raise RecipeError(
+            f"kinematic retargeting of clip '{clip.name}' produced non-finite joint angles"
+        )
     return KinematicMotion(qpos=qpos, fps=clip.fps, root_scale=scale, clipped=clipped)
 
 
@@ -128,8 +131,9 @@ def _body_ids(model: mujoco.MjModel, names: Sequence[str]) -> list[int]:
     return [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names]
 
 
-def _lowest_points(model: mujoco.MjModel, xpos: np.ndarray, xmat: np.ndarray,
-                   geoms: Sequence[int]) -> np.ndarray:
+def _lowest_points(
+    model: mujoco.MjModel, xpos: np.ndarray, xmat: np.ndarray, geoms: Sequence[int]
+) -> np.ndarray:
     """Lowest world z over ``geoms`` per frame, from per-frame geom poses ``(T, G, ...)``."""
     size = model.geom_size[list(geoms)]  # (G, 3)
     types = model.geom_type[list(geoms)]
@@ -163,8 +167,12 @@ class FootArtefacts:
     contact_frames: int
 
 
-def foot_artefacts(model: mujoco.MjModel, motion: KinematicMotion, contacts: np.ndarray,
-                   feet: Mapping[str, Sequence[str]]) -> FootArtefacts:
+def foot_artefacts(
+    model: mujoco.MjModel,
+    motion: KinematicMotion,
+    contacts: np.ndarray,
+    feet: Mapping[str, Sequence[str]],
+) -> FootArtefacts:
     """Measure the foot artefacts of ``motion`` against human contact labels ``(T, 2)``.
 
     ``feet`` maps ``left_foot``/``right_foot`` to body names (a character's body groups).
@@ -185,13 +193,19 @@ def foot_artefacts(model: mujoco.MjModel, motion: KinematicMotion, contacts: np.
         foot_xy[i, 0] = data.xpos[sides[0][0], :2]
         foot_xy[i, 1] = data.xpos[sides[1][0], :2]
     n0 = len(geoms[0])
-    low = np.stack([_lowest_points(model, xpos[:, :n0], xmat[:, :n0], geoms[0]),
-                    _lowest_points(model, xpos[:, n0:], xmat[:, n0:], geoms[1])], axis=1)
+    low = np.stack(
+        [
+            _lowest_points(model, xpos[:, :n0], xmat[:, :n0], geoms[0]),
+            _lowest_points(model, xpos[:, n0:], xmat[:, n0:], geoms[1]),
+        ],
+        axis=1,
+    )
     contacts = np.asarray(contacts, dtype=bool)
     penetration = float(np.mean(np.maximum(-low, 0.0)))
     floating = float(np.mean(np.maximum(low[contacts], 0.0))) if contacts.any() else 0.0
     speed = np.linalg.norm(np.diff(foot_xy, axis=0), axis=-1) * motion.fps  # (T-1, 2)
     held = contacts[1:] & contacts[:-1]
     sliding = float(np.mean(speed[held])) if held.any() else 0.0
-    return FootArtefacts(penetration=penetration, float=floating, sliding=sliding,
-                         contact_frames=int(contacts.sum()))
+    return FootArtefacts(
+        penetration=penetration, float=floating, sliding=sliding, contact_frames=int(contacts.sum())
+    )

@@ -42,6 +42,7 @@ def env_from_recipe(
         seed=recipe.seed,
         privileged_offsets=tuple(recipe.env.privileged_offsets),
         reset_lift=recipe.env.reset_lift,
+        groups=recipe.env.groups,
     )
     clips = load_motions(recipe.motions.path)
     sensors: list[Sensor] = made("sensor")

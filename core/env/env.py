@@ -36,6 +36,7 @@ from retarget.env.observations import (
     proprio_size,
 )
 from retarget.env.reference import CharacterReference
+from retarget.errors import RecipeError
 from retarget.kinds import Character, Observer, RewardTerm, Scene, Sensor, Termination
 from retarget.motion.clip import MotionClip
 from retarget.motion.library import MotionLibrary
@@ -96,6 +97,14 @@ class RetargetEnv:
         self.window_offsets = tuple(range(-past, future + 1))
         self._sources = self._observation_sources()
         self.groups = {k: list(v) for k, v in (opts.groups or self._default_groups()).items()}
+        for group, names in self.groups.items():
+            unknown = [s for s in names if s not in self._sources]
+            if unknown:
+                raise RecipeError(
+                    f"observation group '{group}' names unknown sources {unknown}",
+                    field=f"env.groups.{group}",
+                    hint=f"available: {', '.join(self._sources)}",
+                )
         self.obs_dims = {
             g: sum(self._sources[s][1] for s in names) for g, names in self.groups.items()
         }

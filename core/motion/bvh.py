@@ -141,13 +141,16 @@ def _parse_hierarchy(tokens: _Tokens) -> list[BvhJoint]:
             if name in seen:
                 raise tokens.error(
                     f"duplicate joint name {name!r} (first defined on line "
-                    f"{joints[seen[name]].line}); joint names must be unique", line)
+                    f"{joints[seen[name]].line}); joint names must be unique",
+                    line,
+                )
             if len(joints) >= MAX_JOINTS:
                 raise tokens.error(f"more than {MAX_JOINTS} joints", line)
             tokens.expect("{")
             tokens.expect("OFFSET")
-            offset = np.array([tokens.number("OFFSET x"), tokens.number("OFFSET y"),
-                               tokens.number("OFFSET z")])
+            offset = np.array(
+                [tokens.number("OFFSET x"), tokens.number("OFFSET y"), tokens.number("OFFSET z")]
+            )
             channels: tuple[str, ...] = ()
             if (tokens.peek() or "").upper() == "CHANNELS":
                 tokens.next("'CHANNELS'")
@@ -162,7 +165,9 @@ def _parse_hierarchy(tokens: _Tokens) -> list[BvhJoint]:
                     if canon is None:
                         raise tokens.error(
                             f"CHANNELS {count} lists {i} channel name(s), then {tok!r} "
-                            f"(expected one of {', '.join(CHANNEL_NAMES.values())})", cline)
+                            f"(expected one of {', '.join(CHANNEL_NAMES.values())})",
+                            cline,
+                        )
                     names.append(canon)
                 if len(set(names)) != len(names):
                     raise tokens.error(f"repeated channel in {names}", count_line)
@@ -184,8 +189,9 @@ def _parse_hierarchy(tokens: _Tokens) -> list[BvhJoint]:
                 raise tokens.error(f"expected 'Site' after 'End', found {tok2!r}", line2)
             tokens.expect("{")
             tokens.expect("OFFSET")
-            end = np.array([tokens.number("OFFSET x"), tokens.number("OFFSET y"),
-                            tokens.number("OFFSET z")])
+            end = np.array(
+                [tokens.number("OFFSET x"), tokens.number("OFFSET y"), tokens.number("OFFSET z")]
+            )
             tokens.expect("}")
             owner = joints[stack[-1]]
             if owner.end_site is None:
@@ -215,13 +221,15 @@ def _motion_header(lines: list[str], start: int, file: str) -> tuple[int, float,
         raise MotionError("missing 'Frames:' line after MOTION", file=file, line=start)
     parts = lines[i].replace(":", ": ").split()
     if len(parts) != 2 or parts[0].lower() != "frames:":
-        raise MotionError(f"expected 'Frames: N', found {lines[i].strip()!r}", file=file,
-                          line=i + 1)
+        raise MotionError(
+            f"expected 'Frames: N', found {lines[i].strip()!r}", file=file, line=i + 1
+        )
     try:
         frames = int(parts[1])
     except ValueError:
-        raise MotionError(f"frame count {parts[1]!r} is not an integer", file=file,
-                          line=i + 1) from None
+        raise MotionError(
+            f"frame count {parts[1]!r} is not an integer", file=file, line=i + 1
+        ) from None
     if frames <= 0:
         raise MotionError(f"frame count must be positive, got {frames}", file=file, line=i + 1)
     i += 1
@@ -231,13 +239,15 @@ def _motion_header(lines: list[str], start: int, file: str) -> tuple[int, float,
         raise MotionError("missing 'Frame Time:' line", file=file, line=i)
     parts = lines[i].replace(":", ": ").split()
     if len(parts) != 3 or parts[0].lower() != "frame" or parts[1].lower() != "time:":
-        raise MotionError(f"expected 'Frame Time: SECONDS', found {lines[i].strip()!r}",
-                          file=file, line=i + 1)
+        raise MotionError(
+            f"expected 'Frame Time: SECONDS', found {lines[i].strip()!r}", file=file, line=i + 1
+        )
     try:
         frame_time = float(parts[2])
     except ValueError:
-        raise MotionError(f"frame time {parts[2]!r} is not a number", file=file,
-                          line=i + 1) from None
+        raise MotionError(
+            f"frame time {parts[2]!r} is not a number", file=file, line=i + 1
+        ) from None
     if not (math.isfinite(frame_time) and frame_time > 0):
         raise MotionError(f"frame time must be positive, got {parts[2]}", file=file, line=i + 1)
     return frames, frame_time, i + 1
@@ -253,18 +263,24 @@ def _motion_values(
         if not parts:
             continue
         if len(rows) == frames:
-            raise MotionError(f"more data rows than the {frames} frames declared", file=file,
-                              line=k + 1)
+            raise MotionError(
+                f"more data rows than the {frames} frames declared", file=file, line=k + 1
+            )
         if len(parts) != num_channels:
             raise MotionError(
                 f"frame {len(rows)} has {len(parts)} values, the hierarchy declares "
-                f"{num_channels} channels", file=file, line=k + 1)
+                f"{num_channels} channels",
+                file=file,
+                line=k + 1,
+            )
         rows.append(parts)
         numbers.append(k + 1)
     if len(rows) < frames:
         raise MotionError(
-            f"file is truncated: {frames} frames declared, {len(rows)} found", file=file,
-            line=len(lines))
+            f"file is truncated: {frames} frames declared, {len(rows)} found",
+            file=file,
+            line=len(lines),
+        )
     if num_channels == 0:
         return np.zeros((frames, 0))
     try:
@@ -279,8 +295,9 @@ def _motion_values(
                 except ValueError:
                     ok = False
                 if not ok:
-                    raise MotionError(f"bad number {tok!r} in motion data", file=file,
-                                      line=number) from None
+                    raise MotionError(
+                        f"bad number {tok!r} in motion data", file=file, line=number
+                    ) from None
     return values  # type: ignore[return-value]
 
 
@@ -290,8 +307,7 @@ def parse_bvh_text(text: str, file: str | Path = "<string>") -> BvhData:
     lines = text.splitlines()
     if not any(line.strip() for line in lines):
         raise MotionError("file is empty", file=file, line=1)
-    motion_at = next(
-        (i for i, line in enumerate(lines) if line.strip().upper() == "MOTION"), None)
+    motion_at = next((i for i, line in enumerate(lines) if line.strip().upper() == "MOTION"), None)
     header = lines if motion_at is None else lines[:motion_at]
     tokens = _Tokens(header, file)
     try:
@@ -339,7 +355,7 @@ def source_forward_kinematics(data: BvhData) -> tuple[np.ndarray, np.ndarray]:
     grot = np.empty((f, n, 4))
     for j, joint in enumerate(data.joints):
         start = data.channel_start[j]
-        vals = data.values[:, start:start + len(joint.channels)]
+        vals = data.values[:, start : start + len(joint.channels)]
         trans = np.broadcast_to(joint.offset, (f, 3)).copy()
         angles = []
         for k, ch in enumerate(joint.channels):
@@ -348,8 +364,7 @@ def source_forward_kinematics(data: BvhData) -> tuple[np.ndarray, np.ndarray]:
             else:
                 angles.append(vals[:, k])
         order = joint.rotation_order
-        local = (rot.from_euler(np.stack(angles, -1), order) if order
-                 else rot.identity((f,)))
+        local = rot.from_euler(np.stack(angles, -1), order) if order else rot.identity((f,))
         if joint.parent < 0:
             pos[:, j] = trans
             grot[:, j] = local

@@ -17,9 +17,13 @@ from retarget.motion import skeleton as sk
 from retarget.motion.canonicalize import UNITS, up_axis_matrix
 from retarget.motion.clip import MotionClip
 
-_END_SITES = {"head": (0.0, 0.0, 0.12), "left_toe": (0.05, 0.0, 0.0),
-              "right_toe": (0.05, 0.0, 0.0), "left_wrist": (0.0, 0.08, 0.0),
-              "right_wrist": (0.0, -0.08, 0.0)}
+_END_SITES = {
+    "head": (0.0, 0.0, 0.12),
+    "left_toe": (0.05, 0.0, 0.0),
+    "right_toe": (0.05, 0.0, 0.0),
+    "left_wrist": (0.0, 0.08, 0.0),
+    "right_wrist": (0.0, -0.08, 0.0),
+}
 
 
 def write_bvh(
@@ -33,8 +37,11 @@ def write_bvh(
 ) -> Path:
     """Write ``clip`` to ``path`` as BVH and return the path."""
     path = Path(path)
-    a = rot.identity((sk.NUM_JOINTS,)) if frame_rotations is None else rot.normalize(
-        frame_rotations)
+    a = (
+        rot.identity((sk.NUM_JOINTS,))
+        if frame_rotations is None
+        else rot.normalize(frame_rotations)
+    )
     to_file = up_axis_matrix(up).T  # canonical world -> file world
     to_file_q = rot.from_matrix(to_file)
     scale = 1.0 / UNITS[units]
@@ -65,8 +72,12 @@ def write_bvh(
         for c in kids:
             emit(c, depth + 1)
         if not kids:
-            end = rot.apply(rot.conj(a[j]), np.array(_END_SITES.get(sk.JOINT_NAMES[j],
-                                                                    (0.0, 0.0, 0.0)))) * scale
+            end = (
+                rot.apply(
+                    rot.conj(a[j]), np.array(_END_SITES.get(sk.JOINT_NAMES[j], (0.0, 0.0, 0.0)))
+                )
+                * scale
+            )
             lines.append(f"{pad}  End Site")
             lines.append(f"{pad}  {{")
             lines.append(f"{pad}    OFFSET {end[0]:.6f} {end[1]:.6f} {end[2]:.6f}")

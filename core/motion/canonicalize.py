@@ -129,8 +129,11 @@ def _choose_frames(
             # leaf: the deepest zero-length descendant along first children (CMU lhand)
             best = top
             while True:
-                nxt = [k for k, p in enumerate(src.parents)
-                       if p == best and np.linalg.norm(src.offsets[k]) < 1e-9]
+                nxt = [
+                    k
+                    for k, p in enumerate(src.parents)
+                    if p == best and np.linalg.norm(src.offsets[k]) < 1e-9
+                ]
                 if not nxt:
                     break
                 best = nxt[0]
@@ -158,6 +161,7 @@ def _choose_frames(
 
 def _reference_frame(pos: np.ndarray, pos_src: list[int]) -> int:
     """A standing frame: legs straight, trunk upright, pelvis slow."""
+
     def p(name: str) -> np.ndarray:
         return pos[:, pos_src[sk.joint_index(name)]]
 
@@ -166,7 +170,8 @@ def _reference_frame(pos: np.ndarray, pos_src: list[int]) -> int:
         thigh = p(f"{side}_knee") - p(f"{side}_hip")
         shin = p(f"{side}_ankle") - p(f"{side}_knee")
         cos = np.sum(thigh * shin, -1) / np.maximum(
-            np.linalg.norm(thigh, axis=-1) * np.linalg.norm(shin, axis=-1), 1e-9)
+            np.linalg.norm(thigh, axis=-1) * np.linalg.norm(shin, axis=-1), 1e-9
+        )
         score += 1.0 - cos
     trunk = p("head") - p("pelvis")
     score += 1.0 - trunk[:, 2] / np.maximum(np.linalg.norm(trunk, axis=-1), 1e-9)
@@ -184,14 +189,22 @@ def _swing_then_heading(tdir: np.ndarray, d: np.ndarray, heading: np.ndarray) ->
     return s @ heading
 
 
-_LEAF_DIRECTION = {"head": (0.0, 0.0, 1.0), "left_toe": (1.0, 0.0, 0.0),
-                   "right_toe": (1.0, 0.0, 0.0), "left_wrist": (0.0, 1.0, 0.0),
-                   "right_wrist": (0.0, -1.0, 0.0)}
+_LEAF_DIRECTION = {
+    "head": (0.0, 0.0, 1.0),
+    "left_toe": (1.0, 0.0, 0.0),
+    "right_toe": (1.0, 0.0, 0.0),
+    "left_wrist": (0.0, 1.0, 0.0),
+    "right_wrist": (0.0, -1.0, 0.0),
+}
 
 
 def _reference_rotations(
-    src: SourceMotion, pos: np.ndarray, mats: np.ndarray, pos_src: list[int],
-    frames: list[int], t: int,
+    src: SourceMotion,
+    pos: np.ndarray,
+    mats: np.ndarray,
+    pos_src: list[int],
+    frames: list[int],
+    t: int,
 ) -> np.ndarray:
     """Canonical global rotation matrices ``(J, 3, 3)`` at reference frame ``t``."""
     rest = sk.rest_offsets()
@@ -263,8 +276,9 @@ def canonicalize(
     mats = np.einsum("ij,tsjk->tsik", world, rot.to_matrix(src.rotations))
     frames = _choose_frames(src, pos, mats, pos_src)
     if reference_frame is not None and not 0 <= reference_frame < pos.shape[0]:
-        raise MotionError(f"reference frame {reference_frame} is outside the clip's "
-                          f"{pos.shape[0]} frames")
+        raise MotionError(
+            f"reference frame {reference_frame} is outside the clip's {pos.shape[0]} frames"
+        )
     t_ref = _reference_frame(pos, pos_src) if reference_frame is None else reference_frame
     ref = _reference_rotations(src, pos, mats, pos_src, frames, t_ref)
     align = np.einsum("jki,jkl->jil", mats[t_ref, frames], ref)  # C_j = R_F(t_ref)^T R_j

@@ -72,8 +72,9 @@ class MotionClip:
         if self.root_pos.shape != (t, 3):
             raise ValueError(f"root_pos must be (T, 3), got {self.root_pos.shape}")
         if self.local_rot.shape != (t, sk.NUM_JOINTS, 4):
-            raise ValueError(f"local_rot must be ({t}, {sk.NUM_JOINTS}, 4), got "
-                             f"{self.local_rot.shape}")
+            raise ValueError(
+                f"local_rot must be ({t}, {sk.NUM_JOINTS}, 4), got {self.local_rot.shape}"
+            )
         if self.offsets.shape != (sk.NUM_JOINTS, 3):
             raise ValueError(f"offsets must be ({sk.NUM_JOINTS}, 3), got {self.offsets.shape}")
         if self.contacts is None:

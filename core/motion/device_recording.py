@@ -72,8 +72,7 @@ def write_recording(path: str | Path, rec: DeviceRecording, convention: str = "r
     for k in range(rec.time.shape[0]):
         sample: dict[str, object] = {"t": float(rec.time[k])}
         for d, name in enumerate(DEVICES):
-            sample[name] = ([round(float(v), 7) for v in poses[k, d]]
-                            if rec.tracked[k, d] else None)
+            sample[name] = [round(float(v), 7) for v in poses[k, d]] if rec.tracked[k, d] else None
         lines.append(json.dumps(sample))
     path.write_text("\n".join(lines) + "\n")
     return path
@@ -101,12 +100,18 @@ def read_recording(path: str | Path) -> DeviceRecording:
 
     header = load(*lines[0])
     if header.get("format") != FORMAT or header.get("version") != VERSION:
-        raise MotionError(f"header must be {{'format': '{FORMAT}', 'version': {VERSION}, ...}}",
-                          file=path, line=lines[0][0])
+        raise MotionError(
+            f"header must be {{'format': '{FORMAT}', 'version': {VERSION}, ...}}",
+            file=path,
+            line=lines[0][0],
+        )
     convention = header.get("convention", "retarget")
     if convention not in TO_RETARGET:
-        raise MotionError(f"unknown convention {convention!r}; known: "
-                          f"{', '.join(TO_RETARGET)}", file=path, line=lines[0][0])
+        raise MotionError(
+            f"unknown convention {convention!r}; known: {', '.join(TO_RETARGET)}",
+            file=path,
+            line=lines[0][0],
+        )
     count = len(lines) - 1
     if count == 0:
         raise MotionError("device recording has no samples", file=path, line=lines[0][0])
@@ -120,8 +125,9 @@ def read_recording(path: str | Path) -> DeviceRecording:
         if not isinstance(t, int | float) or not math.isfinite(t):
             raise MotionError("sample needs a finite time 't' in seconds", file=path, line=number)
         if k and t <= time[k - 1]:
-            raise MotionError(f"time {t} is not after the previous sample's {time[k - 1]}",
-                              file=path, line=number)
+            raise MotionError(
+                f"time {t} is not after the previous sample's {time[k - 1]}", file=path, line=number
+            )
         time[k] = t
         for d, name in enumerate(DEVICES):
             value = obj.get(name)
@@ -129,14 +135,19 @@ def read_recording(path: str | Path) -> DeviceRecording:
                 if k:
                     poses[k, d] = poses[k - 1, d]
                 continue
-            if (not isinstance(value, list) or len(value) != 7
-                    or not all(isinstance(v, int | float) and math.isfinite(v) for v in value)):
-                raise MotionError(f"'{name}' must be 7 finite numbers [x, y, z, qw, qx, qy, qz] "
-                                  "or null", file=path, line=number)
+            if (
+                not isinstance(value, list)
+                or len(value) != 7
+                or not all(isinstance(v, int | float) and math.isfinite(v) for v in value)
+            ):
+                raise MotionError(
+                    f"'{name}' must be 7 finite numbers [x, y, z, qw, qx, qy, qz] or null",
+                    file=path,
+                    line=number,
+                )
             q = np.array(value[3:], dtype=np.float64)
             if not 0.5 < np.linalg.norm(q) < 1.5:
-                raise MotionError(f"'{name}' quaternion is not unit length", file=path,
-                                  line=number)
+                raise MotionError(f"'{name}' quaternion is not unit length", file=path, line=number)
             poses[k, d] = np.concatenate([value[:3], rot.normalize(q)])
             tracked[k, d] = True
     poses = convert(poses, convention, "retarget")

@@ -30,7 +30,10 @@ from retarget.motion import skeleton as sk
 
 DEVICES: tuple[str, str, str] = ("hmd", "left", "right")
 MOUNT_JOINTS: tuple[int, int, int] = (
-    sk.joint_index("head"), sk.joint_index("left_wrist"), sk.joint_index("right_wrist"))
+    sk.joint_index("head"),
+    sk.joint_index("left_wrist"),
+    sk.joint_index("right_wrist"),
+)
 MOUNT_OFFSETS_175 = np.array([[0.09, 0.0, 0.08], [0.0, 0.08, -0.02], [0.0, -0.08, -0.02]])
 MOUNT_ROTATIONS = rot.identity((3,))
 

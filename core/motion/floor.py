@@ -27,7 +27,8 @@ def foot_points(clip: MotionClip) -> np.ndarray:
     g = clip.global_pos
     toes = np.array(sk.TOES)
     tip = g[:, toes] + rot.apply(
-        clip.global_rot[:, toes], np.array(TOE_TIP) * clip.height / sk.REFERENCE_HEIGHT)
+        clip.global_rot[:, toes], np.array(TOE_TIP) * clip.height / sk.REFERENCE_HEIGHT
+    )
     return np.stack([g[:, np.array(sk.FEET)], g[:, toes], tip], axis=1)
 
 

@@ -51,15 +51,17 @@ def clip_from_bvh(
     src = source_motion(data)
     try:
         with np.errstate(all="ignore"):
-            clip, info = canonicalize(src, table, units=units, up=up,
-                                      reference_frame=reference_frame)
+            clip, info = canonicalize(
+                src, table, units=units, up=up, reference_frame=reference_frame
+            )
     except MotionError as exc:
         if exc.file is None:
             raise MotionError(exc.message, file=file, hint=exc.hint) from None
         raise
     if not (np.isfinite(clip.local_rot).all() and np.isfinite(clip.root_pos).all()):
-        raise MotionError("motion is degenerate (non-finite values after mapping; coincident "
-                          "joints?)", file=file)
+        raise MotionError(
+            "motion is degenerate (non-finite values after mapping; coincident joints?)", file=file
+        )
     clip = align_floor(clip)
     points = foot_points(clip)
     contacts = label_contacts(points, clip.meta["foot_clearance"], clip.fps)  # type: ignore[arg-type]
@@ -70,8 +72,9 @@ def clip_from_bvh(
         shifted[..., 2] += float(meta["floor_shift"])  # type: ignore[arg-type]
         meta["source_positions"] = shifted
     path = Path(file) if file else None
-    clip = clip.with_(contacts=contacts, skeleton=label, meta=meta, source=path,
-                      name=path.stem if path else "")
+    clip = clip.with_(
+        contacts=contacts, skeleton=label, meta=meta, source=path, name=path.stem if path else ""
+    )
     if fps is not None:
         clip = resample(clip, fps)
     return clip

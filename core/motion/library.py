@@ -100,8 +100,9 @@ class MotionLibrary:
         frame = torch.minimum((u * usable).long(), usable - 1)
         return clip, frame
 
-    def rows(self, clip: torch.Tensor, frame: torch.Tensor, offsets: Sequence[int] = (0,)
-             ) -> torch.Tensor:
+    def rows(
+        self, clip: torch.Tensor, frame: torch.Tensor, offsets: Sequence[int] = (0,)
+    ) -> torch.Tensor:
         """Flat row indices ``(N, W)`` of ``frame + offsets`` clamped to each clip's frames."""
         off = torch.as_tensor(list(offsets), dtype=torch.long, device=self.device)
         f = frame[:, None] + off[None, :]
@@ -134,16 +135,18 @@ class MotionLibrary:
         data = {k: gather(k) if k in fields else empty for k in FIELDS}
         return ReferenceWindow(**data, offsets=tuple(int(o) for o in offsets))
 
-    def advance(self, clip: torch.Tensor, frame: torch.Tensor, steps: int = 1
-                ) -> tuple[torch.Tensor, torch.Tensor]:
+    def advance(
+        self, clip: torch.Tensor, frame: torch.Tensor, steps: int = 1
+    ) -> tuple[torch.Tensor, torch.Tensor]:
         """Next frames and whether each environment ran past the end of its clip."""
         nxt = frame + steps
         done = nxt >= self.length[clip]
         return torch.minimum(nxt, self.length[clip] - 1), done
 
 
-def window_offsets(seconds: float, fps: float = CONTROL_RATE, *, future: float = 0.0
-                   ) -> tuple[int, ...]:
+def window_offsets(
+    seconds: float, fps: float = CONTROL_RATE, *, future: float = 0.0
+) -> tuple[int, ...]:
     """Frame offsets covering ``seconds`` of past up to now, plus ``future`` seconds ahead."""
     past = round(seconds * fps)
     ahead = round(future * fps)

@@ -30,22 +30,25 @@ _J = sk.joint_index
 def _rz(a: np.ndarray) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
     z, o = np.zeros_like(a), np.ones_like(a)
-    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1),
-                     np.stack([z, z, o], -1)], -2)
+    return np.stack(
+        [np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2
+    )
 
 
 def _ry(a: np.ndarray) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
     z, o = np.zeros_like(a), np.ones_like(a)
-    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1),
-                     np.stack([-s, z, c], -1)], -2)
+    return np.stack(
+        [np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], -2
+    )
 
 
 def _rx(a: np.ndarray) -> np.ndarray:
     c, s = np.cos(a), np.sin(a)
     z, o = np.zeros_like(a), np.ones_like(a)
-    return np.stack([np.stack([o, z, z], -1), np.stack([z, c, -s], -1),
-                     np.stack([z, s, c], -1)], -2)
+    return np.stack(
+        [np.stack([o, z, z], -1), np.stack([z, c, -s], -1), np.stack([z, s, c], -1)], -2
+    )
 
 
 def _aim(tdir: np.ndarray, d: np.ndarray, heading: np.ndarray) -> np.ndarray:
@@ -129,8 +132,7 @@ class _Body:
             hip = root + np.einsum("tij,j->ti", pelvis_rot, self.off[_J(f"{side}_hip")])
             target = ankles[side]
             d = target - hip
-            dist = np.clip(np.linalg.norm(d, axis=-1), abs(self.thigh - self.shin) + 1e-6,
-                           reach)
+            dist = np.clip(np.linalg.norm(d, axis=-1), abs(self.thigh - self.shin) + 1e-6, reach)
             u = d / np.linalg.norm(d, axis=-1, keepdims=True)
             fwd = heading[:, :, 0]
             n = fwd - np.sum(fwd * u, -1, keepdims=True) * u
@@ -147,15 +149,17 @@ class _Body:
             tp = foot_pitch[side] if toe_pitch is None else toe_pitch[side]
             g[:, _J(f"{side}_toe")] = self.foot_rotation(fy, tp)
         local = local_from_global(rot.from_matrix(g))
-        clip = MotionClip(fps, root, local, self.off, name=name, skeleton="canonical",
-                          meta={"generated": True})
+        clip = MotionClip(
+            fps, root, local, self.off, name=name, skeleton="canonical", meta={"generated": True}
+        )
         clip = align_floor(clip)
         contacts = label_contacts(foot_points(clip), clip.meta["foot_clearance"], fps)  # type: ignore[arg-type]
         return clip.with_(contacts=contacts)
 
 
-def _walk(body: _Body, name: str, seconds: float, fps: float, speed: float,
-          yaw_rate: float) -> MotionClip:
+def _walk(
+    body: _Body, name: str, seconds: float, fps: float, speed: float, yaw_rate: float
+) -> MotionClip:
     period = 1.05  # one stride (two steps), seconds
     stance = 0.62
     t = np.arange(int(seconds * fps)) / fps
@@ -181,13 +185,19 @@ def _walk(body: _Body, name: str, seconds: float, fps: float, speed: float,
         n = np.floor(phase)
         phi = phase - n
 
-        def footprint(cycle: np.ndarray, lateral: np.ndarray = lateral, k: int = k) -> tuple[
-                np.ndarray, np.ndarray]:
+        def footprint(
+            cycle: np.ndarray, lateral: np.ndarray = lateral, k: int = k
+        ) -> tuple[np.ndarray, np.ndarray]:
             when = (cycle + 0.5 * k + stance * 0.5) * period
             c = at(xy_f, when)
             y = np.interp(when, tt, yaw_f)
-            lat = np.stack([np.cos(y) * lateral[0] - np.sin(y) * lateral[1],
-                            np.sin(y) * lateral[0] + np.cos(y) * lateral[1]], -1)
+            lat = np.stack(
+                [
+                    np.cos(y) * lateral[0] - np.sin(y) * lateral[1],
+                    np.sin(y) * lateral[0] + np.cos(y) * lateral[1],
+                ],
+                -1,
+            )
             return c + lat, y
 
         here, yaw_here = footprint(n)
@@ -195,8 +205,9 @@ def _walk(body: _Body, name: str, seconds: float, fps: float, speed: float,
         # stance: flat, then heel lift about the ball of the foot during toe-off
         lift = max_pitch * _smooth((phi - 0.38) / (stance - 0.38))
         flat_ankle = np.concatenate([here, np.full((t.size, 1), body.ankle_h)], -1)
-        flat_toe = flat_ankle + np.einsum("tij,j->ti", body.foot_rotation(
-            yaw_here, np.zeros_like(phi)), toe_local)
+        flat_toe = flat_ankle + np.einsum(
+            "tij,j->ti", body.foot_rotation(yaw_here, np.zeros_like(phi)), toe_local
+        )
         stance_ankle = body.ankle_from_toe(flat_toe, yaw_here, lift)
         # swing: from the toe-off pose to the next flat footprint, foot clear of the ground
         s = np.clip((phi - stance) / (1 - stance), 0.0, 1.0)
@@ -210,13 +221,24 @@ def _walk(body: _Body, name: str, seconds: float, fps: float, speed: float,
         pitches[side] = np.where(phi >= stance, max_pitch * (1 - _smooth(s / 0.6)), lift)
         # the toes stay flat on the ground while the heel lifts, then follow the foot
         toe_pitch[side] = np.where(phi >= stance, pitches[side] * _smooth(s / 0.15), 0.0)
-        foot_yaw[side] = np.where(phi >= stance, yaw_here + (yaw_there - yaw_here) * _smooth(s),
-                                  yaw_here)
+        foot_yaw[side] = np.where(
+            phi >= stance, yaw_here + (yaw_there - yaw_here) * _smooth(s), yaw_here
+        )
         swing_arm[side] = -np.deg2rad(18.0) * np.sin(2 * np.pi * phase) * ramp
     bob = 0.015 * body.s * (1 - np.cos(4 * np.pi * t / period)) * ramp
-    return body.build(name, fps, root_xy, yaw, ankles, pitches, pelvis_drop=0.03 * body.s + bob,
-                      lean=np.deg2rad(4.0) * ramp, arm_swing=swing_arm, foot_yaw=foot_yaw,
-                      toe_pitch=toe_pitch)
+    return body.build(
+        name,
+        fps,
+        root_xy,
+        yaw,
+        ankles,
+        pitches,
+        pelvis_drop=0.03 * body.s + bob,
+        lean=np.deg2rad(4.0) * ramp,
+        arm_swing=swing_arm,
+        foot_yaw=foot_yaw,
+        toe_pitch=toe_pitch,
+    )
 
 
 def _idle(body: _Body, fps: float, seconds: float = 6.0) -> MotionClip:
@@ -230,11 +252,23 @@ def _idle(body: _Body, fps: float, seconds: float = 6.0) -> MotionClip:
         ankles[side] = np.tile(a, (t.size, 1))
         pitches[side] = np.zeros_like(t)
     breathe = np.deg2rad(1.5) * np.sin(2 * np.pi * t / 3.5)
-    swing = {"left": np.deg2rad(4.0) * np.sin(2 * np.pi * t / 3.5),
-             "right": np.deg2rad(4.0) * np.sin(2 * np.pi * t / 3.5 + 1.0)}
+    swing = {
+        "left": np.deg2rad(4.0) * np.sin(2 * np.pi * t / 3.5),
+        "right": np.deg2rad(4.0) * np.sin(2 * np.pi * t / 3.5 + 1.0),
+    }
     look = np.deg2rad(25.0) * np.sin(2 * np.pi * t / 6.0)
-    return body.build("idle", fps, root_xy, yaw, ankles, pitches, pelvis_drop=0.01 * body.s,
-                      lean=breathe, arm_swing=swing, head_yaw=look)
+    return body.build(
+        "idle",
+        fps,
+        root_xy,
+        yaw,
+        ankles,
+        pitches,
+        pelvis_drop=0.01 * body.s,
+        lean=breathe,
+        arm_swing=swing,
+        head_yaw=look,
+    )
 
 
 def _sit_stand(body: _Body, fps: float) -> MotionClip:
@@ -244,7 +278,8 @@ def _sit_stand(body: _Body, fps: float) -> MotionClip:
     up = _smooth((t - 4.2) / 1.6)
     seated = down - up  # 0 standing, 1 seated
     moving = np.sin(np.pi * np.clip((t - 1.0) / 1.6, 0, 1)) + np.sin(
-        np.pi * np.clip((t - 4.2) / 1.6, 0, 1))
+        np.pi * np.clip((t - 4.2) / 1.6, 0, 1)
+    )
     yaw = np.zeros_like(t)
     root_xy = np.stack([-0.32 * body.s * seated, np.zeros_like(t)], -1)
     seat_pelvis = 0.45 * body.s + 0.09 * body.s
@@ -256,8 +291,9 @@ def _sit_stand(body: _Body, fps: float) -> MotionClip:
         pitches[side] = np.zeros_like(t)
     lean = np.deg2rad(38.0) * moving + np.deg2rad(5.0) * seated
     swing = {"left": -np.deg2rad(25.0) * seated, "right": -np.deg2rad(25.0) * seated}
-    return body.build("sit_stand", fps, root_xy, yaw, ankles, pitches, lean=lean,
-                      arm_swing=swing, pelvis_z=z)
+    return body.build(
+        "sit_stand", fps, root_xy, yaw, ankles, pitches, lean=lean, arm_swing=swing, pelvis_z=z
+    )
 
 
 GENERATORS: dict[str, Callable[[_Body, float], MotionClip]] = {
@@ -269,8 +305,9 @@ GENERATORS: dict[str, Callable[[_Body, float], MotionClip]] = {
 }
 
 
-def default_motions(height: float = sk.REFERENCE_HEIGHT, fps: float = GEN_FPS,
-                    names: tuple[str, ...] | None = None) -> list[MotionClip]:
+def default_motions(
+    height: float = sk.REFERENCE_HEIGHT, fps: float = GEN_FPS, names: tuple[str, ...] | None = None
+) -> list[MotionClip]:
     """The generated default set (all clips, or those in ``names``) for a subject's height."""
     body = _Body(height)
     wanted = tuple(GENERATORS) if names is None else names

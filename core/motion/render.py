@@ -53,14 +53,27 @@ def _color(j: int) -> tuple[float, ...]:
     return _LEFT if name.startswith("left") else _RIGHT if name.startswith("right") else _MID
 
 
-def _add_geom(mujoco, scene, kind: int, size: list[float], at: np.ndarray,
-              rgba: tuple[float, ...], to: np.ndarray | None = None) -> None:
+def _add_geom(
+    mujoco,
+    scene,
+    kind: int,
+    size: list[float],
+    at: np.ndarray,
+    rgba: tuple[float, ...],
+    to: np.ndarray | None = None,
+) -> None:
     """Append one decorative geom (a connector capsule when ``to`` is given) to a scene."""
     if scene.ngeom >= scene.maxgeom:
         return
     geom = scene.geoms[scene.ngeom]
-    mujoco.mjv_initGeom(geom, kind, np.array(size + [0.0] * (3 - len(size))), at,
-                        np.eye(3).ravel(), np.array(rgba, dtype=np.float32))
+    mujoco.mjv_initGeom(
+        geom,
+        kind,
+        np.array(size + [0.0] * (3 - len(size))),
+        at,
+        np.eye(3).ravel(),
+        np.array(rgba, dtype=np.float32),
+    )
     if to is not None:
         mujoco.mjv_connector(geom, kind, size[0], at, to)
     scene.ngeom += 1
@@ -117,8 +130,14 @@ def render_frames(
             renderer.update_scene(data, camera=cam)
             scene = renderer.scene
 
-            def add(kind: int, size: list[float], at: np.ndarray, rgba: tuple[float, ...],
-                    to: np.ndarray | None = None, scene=scene) -> None:
+            def add(
+                kind: int,
+                size: list[float],
+                at: np.ndarray,
+                rgba: tuple[float, ...],
+                to: np.ndarray | None = None,
+                scene=scene,
+            ) -> None:
                 _add_geom(mujoco, scene, kind, size, at, rgba, to)
 
             for j in range(1, sk.NUM_JOINTS):
@@ -127,8 +146,12 @@ def render_frames(
                     add(mujoco.mjtGeom.mjGEOM_CAPSULE, [radius], a, _color(j), b)
             for j in range(sk.NUM_JOINTS):
                 add(mujoco.mjtGeom.mjGEOM_SPHERE, [radius * 1.3], p[j], _color(j))
-            add(mujoco.mjtGeom.mjGEOM_SPHERE, [radius * 3.0],
-                p[sk.joint_index("head")] + np.array([0, 0, 0.09]) * clip.height / 1.75, _MID)
+            add(
+                mujoco.mjtGeom.mjGEOM_SPHERE,
+                [radius * 3.0],
+                p[sk.joint_index("head")] + np.array([0, 0, 0.09]) * clip.height / 1.75,
+                _MID,
+            )
             for k, ankle in enumerate(sk.FEET):
                 if clip.contacts[f, k]:
                     spot = p[ankle].copy()
@@ -151,7 +174,7 @@ def contact_sheet(images: np.ndarray, columns: int = 4) -> np.ndarray:
     sheet = np.full((rows * (h + gap) - gap, columns * (w + gap) - gap, 3), 255, np.uint8)
     for i, img in enumerate(images):
         r, c = divmod(i, columns)
-        sheet[r * (h + gap):r * (h + gap) + h, c * (w + gap):c * (w + gap) + w] = img
+        sheet[r * (h + gap) : r * (h + gap) + h, c * (w + gap) : c * (w + gap) + w] = img
     return sheet
 
 
@@ -163,8 +186,12 @@ def write_png(path: str | Path, image: np.ndarray) -> Path:
     raw = np.concatenate([np.zeros((h, 1), np.uint8), img.reshape(h, w * 3)], axis=1)
 
     def chunk(tag: bytes, payload: bytes) -> bytes:
-        return (struct.pack(">I", len(payload)) + tag + payload
-                + struct.pack(">I", zlib.crc32(tag + payload) & 0xFFFFFFFF))
+        return (
+            struct.pack(">I", len(payload))
+            + tag
+            + payload
+            + struct.pack(">I", zlib.crc32(tag + payload) & 0xFFFFFFFF)
+        )
 
     png = b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
     png += chunk(b"IDAT", zlib.compress(raw.tobytes(), 6)) + chunk(b"IEND", b"")

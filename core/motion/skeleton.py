@@ -114,9 +114,7 @@ HEAD_TOP_175 = 0.17
 stature, where mocap skeletons put their head joint)."""
 
 LEFT_RIGHT: tuple[int, ...] = tuple(
-    JOINT_NAMES.index(
-        n.replace("left_", "@").replace("right_", "left_").replace("@", "right_")
-    )
+    JOINT_NAMES.index(n.replace("left_", "@").replace("right_", "left_").replace("@", "right_"))
     for n in JOINT_NAMES
 )
 """Index of each joint's mirror partner (``left_knee`` <-> ``right_knee``; spine maps to itself)."""

@@ -44,9 +44,14 @@ CMU_3DSMAX = _sided(
         "left_wrist": "LeftWrist",
     },
     {
-        "LeftHip": "RightHip", "LeftKnee": "RightKnee", "LeftAnkle": "RightAnkle",
-        "LeftToe": "RightToe", "LeftCollar": "RightCollar", "LeftShoulder": "RightShoulder",
-        "LeftElbow": "RightElbow", "LeftWrist": "RightWrist",
+        "LeftHip": "RightHip",
+        "LeftKnee": "RightKnee",
+        "LeftAnkle": "RightAnkle",
+        "LeftToe": "RightToe",
+        "LeftCollar": "RightCollar",
+        "LeftShoulder": "RightShoulder",
+        "LeftElbow": "RightElbow",
+        "LeftWrist": "RightWrist",
     },
 )
 """CMU, cgspeed "3dsMax-friendly" BVH conversion (31 joints)."""
@@ -69,9 +74,14 @@ CMU_MOTIONBUILDER = _sided(
         "left_wrist": "LeftHand",
     },
     {
-        "LeftUpLeg": "RightUpLeg", "LeftLeg": "RightLeg", "LeftFoot": "RightFoot",
-        "LeftToeBase": "RightToeBase", "LeftShoulder": "RightShoulder", "LeftArm": "RightArm",
-        "LeftForeArm": "RightForeArm", "LeftHand": "RightHand",
+        "LeftUpLeg": "RightUpLeg",
+        "LeftLeg": "RightLeg",
+        "LeftFoot": "RightFoot",
+        "LeftToeBase": "RightToeBase",
+        "LeftShoulder": "RightShoulder",
+        "LeftArm": "RightArm",
+        "LeftForeArm": "RightForeArm",
+        "LeftHand": "RightHand",
     },
 )
 """CMU, cgspeed "MotionBuilder-friendly" BVH conversion (31 joints, T-pose frame 0)."""
@@ -94,9 +104,14 @@ BANDAI = _sided(
         "left_wrist": "Hand_L",
     },
     {
-        "UpperLeg_L": "UpperLeg_R", "LowerLeg_L": "LowerLeg_R", "Foot_L": "Foot_R",
-        "Toes_L": "Toes_R", "Shoulder_L": "Shoulder_R", "UpperArm_L": "UpperArm_R",
-        "LowerArm_L": "LowerArm_R", "Hand_L": "Hand_R",
+        "UpperLeg_L": "UpperLeg_R",
+        "LowerLeg_L": "LowerLeg_R",
+        "Foot_L": "Foot_R",
+        "Toes_L": "Toes_R",
+        "Shoulder_L": "Shoulder_R",
+        "UpperArm_L": "UpperArm_R",
+        "LowerArm_L": "LowerArm_R",
+        "Hand_L": "Hand_R",
     },
 )
 """Bandai Namco Research Motion Dataset (22 joints incl. a dummy ``joint_Root``)."""
@@ -119,9 +134,14 @@ LAFAN1 = _sided(
         "left_wrist": "LeftHand",
     },
     {
-        "LeftUpLeg": "RightUpLeg", "LeftLeg": "RightLeg", "LeftFoot": "RightFoot",
-        "LeftToe": "RightToe", "LeftShoulder": "RightShoulder", "LeftArm": "RightArm",
-        "LeftForeArm": "RightForeArm", "LeftHand": "RightHand",
+        "LeftUpLeg": "RightUpLeg",
+        "LeftLeg": "RightLeg",
+        "LeftFoot": "RightFoot",
+        "LeftToe": "RightToe",
+        "LeftShoulder": "RightShoulder",
+        "LeftArm": "RightArm",
+        "LeftForeArm": "RightForeArm",
+        "LeftHand": "RightHand",
     },
 )
 """Ubisoft LaFAN1 (22 joints, centimetres, Y up)."""
@@ -142,20 +162,25 @@ so the CMU MotionBuilder map (which needs ``LowerBack``/``Neck1``) is tried firs
 
 def _missing(name_map: NameMap, names: Sequence[str]) -> list[str]:
     present = set(names)
-    return [c for c in sk.JOINT_NAMES if name_map.get(c) is not None
-            and name_map[c] not in present]
+    return [c for c in sk.JOINT_NAMES if name_map.get(c) is not None and name_map[c] not in present]
 
 
 def validate_name_map(name_map: NameMap, file: str | None = None) -> None:
     unknown = sorted(set(name_map) - set(sk.JOINT_NAMES))
     if unknown:
-        raise MotionError(f"name map has unknown canonical joints {unknown}; canonical joints "
-                          f"are: {', '.join(sk.JOINT_NAMES)}", file=file)
+        raise MotionError(
+            f"name map has unknown canonical joints {unknown}; canonical joints "
+            f"are: {', '.join(sk.JOINT_NAMES)}",
+            file=file,
+        )
     absent = [c for c in sk.JOINT_NAMES if c not in name_map]
     if absent:
-        raise MotionError(f"name map does not map canonical joints {absent}", file=file,
-                          hint="map each to a source joint name, or to null when the source "
-                               "has no joint there (it then rides on its parent)")
+        raise MotionError(
+            f"name map does not map canonical joints {absent}",
+            file=file,
+            hint="map each to a source joint name, or to null when the source "
+            "has no joint there (it then rides on its parent)",
+        )
     if name_map.get("pelvis") is None:
         raise MotionError("name map must map 'pelvis' to the source root joint", file=file)
 
@@ -170,7 +195,9 @@ def detect(
         if missing:
             raise MotionError(
                 f"name map refers to source joints that are not in the file: "
-                f"{', '.join(f'{c} -> {name_map[c]}' for c in missing)}", file=file)
+                f"{', '.join(f'{c} -> {name_map[c]}' for c in missing)}",
+                file=file,
+            )
         return "custom", name_map
     for label, table in KNOWN.items():
         if not _missing(table, names):
@@ -183,7 +210,7 @@ def detect(
         f"{', '.join(str(best[c]) for c in unmapped)}); source joints are: {', '.join(names)}",
         file=file,
         hint="pass a name map from canonical joint to source joint name, e.g. in the recipe "
-             "`motion_formats: {bvh: {name_map: {pelvis: Hips, left_hip: LThigh, ...}}}` or "
-             "BvhFormat(BvhFormat.Config(name_map={...})); canonical joints: "
-             + ", ".join(sk.JOINT_NAMES),
+        "`motion_formats: {bvh: {name_map: {pelvis: Hips, left_hip: LThigh, ...}}}` or "
+        "BvhFormat(BvhFormat.Config(name_map={...})); canonical joints: "
+        + ", ".join(sk.JOINT_NAMES),
     )

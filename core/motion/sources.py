@@ -41,8 +41,9 @@ def resolve_motion_source(
         raise MotionError(f"motion path does not exist ({origin})", file=p)
     files = sorted(f for f in p.rglob("*") if f.is_file() and f.suffix.lower() in wanted)
     if not files:
-        raise MotionError(f"no motion files ({', '.join(wanted)}) under this directory "
-                          f"({origin})", file=p)
+        raise MotionError(
+            f"no motion files ({', '.join(wanted)}) under this directory ({origin})", file=p
+        )
     return files
 
 
@@ -53,8 +54,9 @@ def reader_for(path: Path, formats: Mapping[str, MotionFormat]) -> MotionFormat:
         if suffix in (s.lower() for s in fmt.suffixes):
             return fmt
     known = sorted({s for f in formats.values() for s in f.suffixes})
-    raise MotionError(f"no motion format reads '{suffix}' files; known: {', '.join(known)}",
-                      file=path)
+    raise MotionError(
+        f"no motion format reads '{suffix}' files; known: {', '.join(known)}", file=path
+    )
 
 
 def load_motions(
@@ -80,5 +82,7 @@ def default_formats() -> dict[str, MotionFormat]:
     from retarget.loader import load_plugins
 
     registry = load_plugins()
-    return {name: registry.get("motion_format", name).cls()  # type: ignore[misc]
-            for name in registry.names("motion_format")}
+    return {
+        name: registry.get("motion_format", name).cls()  # type: ignore[misc]
+        for name in registry.names("motion_format")
+    }

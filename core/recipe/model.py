@@ -64,6 +64,12 @@ class EnvSection(Strict):
         description="future reference frames the critic sees (asymmetric critic)",
     )
     reset_lift: float = Field(0.02, ge=0, description="root lift at reset, m")
+    groups: dict[str, list[str]] | None = Field(
+        None,
+        description="observation groups: name -> sources (sensor/observer names, 'proprio', "
+        "'privileged'); default actor = sensors + proprio + observers, critic = actor + "
+        "privileged",
+    )
 
 
 class Recipe(Strict):

@@ -12,6 +12,7 @@ import torch
 from retarget.env import EnvOptions, RetargetEnv, random_actions
 from retarget.env.build import env_from_recipe
 from retarget.env.observations import privileged, proprio
+from retarget.errors import RecipeError
 from retarget.heading import quat_mul, yaw_quat
 from retarget.loader import load_plugins
 from retarget.motion.procedural import default_motions
@@ -156,3 +157,14 @@ def test_time_out_at_clip_end_and_fail_penalty() -> None:
     env.sim.batch.forward(np.array([1]))
     _, reward, terminated, _, _ = env.step(torch.zeros(4, env.action_dim))
     assert terminated[1] and reward[1] == pytest.approx(-5.0)
+
+
+def test_custom_observation_groups_and_their_errors() -> None:
+    env = make_env(
+        "human", 2, **{"env.groups": "{student: [three_point], teacher: [proprio, privileged]}"}
+    )
+    obs = env.reset()
+    assert set(obs) == {"student", "teacher"}
+    assert obs["student"].shape[1] == env.sensors[0].spec(env.layout).size
+    with pytest.raises(RecipeError, match="unknown sources"):
+        make_env("human", 2, **{"env.groups": "{actor: [three_pointt]}"})
