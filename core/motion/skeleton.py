@@ -162,15 +162,17 @@ def standing_pelvis_height(offsets: np.ndarray) -> float:
 def estimate_height(offsets: np.ndarray, ankle_height: float | None = None) -> float:
     """Standing height (floor to crown) implied by a subject's bone offsets.
 
-    Measured from the ankle to the head joint in the T-pose, plus the ankle's height above the
-    floor (measured on the clip when known, else the average adult's in proportion), then
-    divided by the head joint's share of stature in the reference proportions (no source marks
-    the crown of the head).
+    Scaled from the leg: the pelvis-to-ankle span of the T-pose plus the ankle's height above
+    the floor (measured on the clip when known, else the average adult's in proportion), over
+    the same span of the reference proportions. The leg is used rather than the head because
+    sources put their head joint at different vertebrae (Bandai's "Head" sits about 7 cm below
+    the skull base, which made a head-based estimate read 1.50 m for a subject whose pelvis
+    stands at 0.93 m), while hip height is a stable share of stature (~0.55).
     """
     pos = tpose_positions(offsets)
-    span = pos[joint_index("head"), 2] - min(pos[FEET[0], 2], pos[FEET[1], 2])
+    leg = pos[ROOT, 2] - min(pos[FEET[0], 2], pos[FEET[1], 2])
     ref = tpose_positions(rest_offsets())
-    ref_span = ref[joint_index("head"), 2] - ref[FEET[0], 2]
+    ref_leg = ref[ROOT, 2] - ref[FEET[0], 2]
     if ankle_height is None:
-        ankle_height = ANKLE_HEIGHT_175 * span / ref_span
-    return float((span + ankle_height) * REFERENCE_HEIGHT / (ref_span + ANKLE_HEIGHT_175))
+        ankle_height = ANKLE_HEIGHT_175 * leg / ref_leg
+    return float((leg + ankle_height) * REFERENCE_HEIGHT / (ref_leg + ANKLE_HEIGHT_175))
