@@ -247,6 +247,37 @@ class RetargetEnv:
         sec["terminations"] += t4 - t3
         return obs, reward, failed, timed_out, info
 
+    def state_dict(self) -> dict:
+        """Everything needed to continue stepping exactly where this env is (checkpoints)."""
+        return {
+            "sim": self.sim.state_dict(),
+            "clip": self.clip.clone(),
+            "frame": self.frame.clone(),
+            "episode_step": self.episode_step.clone(),
+            "episode_return": self.episode_return.clone(),
+            "prev_action": self.prev_action.clone(),
+            "reward_sums": self.rewards.episode_sums.clone(),
+            "generator": self.generator.get_state(),
+            "nan_resets": self.nan_resets,
+        }
+
+    def load_state_dict(self, state: Mapping) -> dict[str, torch.Tensor]:
+        """Restore :meth:`state_dict`; returns the observations of the restored state."""
+        if state["clip"].shape[0] != self.num_envs:
+            raise ValueError(
+                f"checkpoint has {state['clip'].shape[0]} environments, this env {self.num_envs}"
+            )
+        self.sim.load_state_dict(state["sim"])
+        self.clip, self.frame = state["clip"].clone(), state["frame"].clone()
+        self.episode_step = state["episode_step"].clone()
+        self.episode_return = state["episode_return"].clone()
+        self.prev_action = state["prev_action"].clone()
+        self.rewards.episode_sums = state["reward_sums"].clone()
+        self.generator.set_state(state["generator"])
+        self.nan_resets = int(state["nan_resets"])
+        self._ctx = self._context(self.prev_action)
+        return self.observe(self._ctx)
+
     @property
     def termination_counts(self) -> dict[str, int]:
         return dict(self.terminations.counts)

@@ -186,6 +186,18 @@ class BatchedSim:
         buf["site_quat"][rows] = self._site_xquat[sites]
         buf["contact_force"][rows] = np.linalg.norm(self._cfrc[sel][..., 3:], axis=-1)
 
+    STATE_FIELDS = ("qpos", "qvel", "act", "ctrl", "time", "qacc_warmstart")
+    """What a checkpoint needs for the next step to be bit-identical to an uninterrupted run."""
+
+    def state_dict(self) -> dict[str, np.ndarray]:
+        return {k: self.batch.bind(k).copy() for k in self.STATE_FIELDS}
+
+    def load_state_dict(self, state: dict[str, np.ndarray]) -> None:
+        for key in self.STATE_FIELDS:
+            self.batch.bind(key)[:] = state[key]
+        self.batch.forward()
+        self.gather()
+
     def raw(self, field: str) -> np.ndarray:
         """The live ``(N, ...)`` MuJoCo array of ``field`` (tests and backends use this)."""
         return self.batch.bind(field)

@@ -168,3 +168,21 @@ def test_custom_observation_groups_and_their_errors() -> None:
     assert obs["student"].shape[1] == env.sensors[0].spec(env.layout).size
     with pytest.raises(RecipeError, match="unknown sources"):
         make_env("human", 2, **{"env.groups": "{actor: [three_pointt]}"})
+
+
+def test_state_dict_continues_bit_identically() -> None:
+    a, b = make_env("human", 6), make_env("human", 6)
+    gen = torch.Generator().manual_seed(9)
+    actions = [random_actions(a, gen, 0.4) for _ in range(12)]
+    a.reset()
+    for act in actions[:6]:
+        a.step(act)
+    b.reset()
+    b.step(actions[0])  # diverge, then restore a's state into b
+    state = a.state_dict()
+    b.load_state_dict(state)
+    for act in actions[6:]:
+        oa, ra, ta, ua, _ = a.step(act)
+        ob, rb, tb, ub, _ = b.step(act)
+        assert torch.equal(ra, rb) and torch.equal(ta, tb) and torch.equal(ua, ub)
+        assert all(torch.equal(oa[k], ob[k]) for k in oa)
