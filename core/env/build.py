@@ -10,9 +10,18 @@ from retarget.sim import SimSettings
 
 
 def env_from_recipe(
-    resolved: ResolvedRecipe, *, num_envs: int | None = None, threads: int | None = None
+    resolved: ResolvedRecipe,
+    *,
+    num_envs: int | None = None,
+    threads: int | None = None,
+    motions: str | None = None,
+    terminations: bool = True,
 ) -> RetargetEnv:
-    """Instantiate every component of ``resolved``, load its motions and build the env."""
+    """Instantiate every component of ``resolved``, load its motions and build the env.
+
+    ``motions`` replaces the recipe's motion path (evaluation on other clips);
+    ``terminations=False`` keeps only clip ends (evaluation follows runs through failures).
+    """
     recipe = resolved.recipe
 
     def made(kind: str) -> list:
@@ -26,10 +35,10 @@ def env_from_recipe(
         for path, comp in resolved.components.items()
         if comp.entry.kind == "reward"
     }
-    terminations = {
+    ends = {
         path.split(".", 1)[1]: comp.instantiate()
         for path, comp in resolved.components.items()
-        if comp.entry.kind == "termination"
+        if comp.entry.kind == "termination" and terminations
     }
     sim = SimSettings(
         control_hz=recipe.sim.control_hz,
@@ -44,19 +53,19 @@ def env_from_recipe(
         reset_lift=recipe.env.reset_lift,
         groups=recipe.env.groups,
     )
-    clips = load_motions(recipe.motions.path)
+    clips = load_motions(motions if motions is not None else recipe.motions.path)
     sensors: list[Sensor] = made("sensor")
     observers: list[Observer] = made("observer")
     scene: Scene | None = scenes[0] if scenes else None
     assert all(isinstance(r, RewardTerm) for r in rewards.values())
-    assert all(isinstance(t, Termination) for t in terminations.values())
+    assert all(isinstance(t, Termination) for t in ends.values())
     return RetargetEnv(
         character,
         clips,
         sensors=sensors,
         observers=observers,
         rewards=rewards,
-        terminations=terminations,
+        terminations=ends,
         scene=scene,
         options=options,
     )

@@ -116,6 +116,7 @@ class RetargetEnv:
         self.episode_return = torch.zeros(n)
         self.prev_action = torch.zeros(n, layout.nu)
         self.nan_resets = 0
+        self.total_steps = 0  # environment steps taken (num_envs per call of step)
         self.seconds = dict.fromkeys(
             ("reference", "rewards", "terminations", "observations", "resets"), 0.0
         )
@@ -179,11 +180,18 @@ class RetargetEnv:
 
     # ------------------------------------------------------------------ resets
 
-    def _reset_envs(self, env_ids: torch.Tensor) -> None:
-        """Reference state initialisation: random (clip, frame), the kinematic pose there."""
+    def _reset_envs(
+        self,
+        env_ids: torch.Tensor,
+        clip: torch.Tensor | None = None,
+        frame: torch.Tensor | None = None,
+    ) -> None:
+        """Reference state initialisation: random (clip, frame) unless given, and the
+        kinematic pose there."""
         if env_ids.numel() == 0:
             return
-        clip, frame = self.library.sample(int(env_ids.numel()), self.generator, margin=2)
+        if clip is None or frame is None:
+            clip, frame = self.library.sample(int(env_ids.numel()), self.generator, margin=2)
         self.clip[env_ids], self.frame[env_ids] = clip, frame
         rows = self.library.rows(clip, frame)[:, 0].numpy()
         qpos = self.reference.qpos64[rows].copy()
@@ -196,6 +204,14 @@ class RetargetEnv:
         for plugin in (*self.sensors, *self.observers):
             plugin.reset(env_ids)
 
+    def place(self, clip: torch.Tensor, frame: torch.Tensor) -> dict[str, torch.Tensor]:
+        """Start every environment at the given reference (clip, frame): evaluation uses this
+        to start from every k-th frame instead of random ones."""
+        self._reset_envs(torch.arange(self.num_envs), clip.long(), frame.long())
+        self.rewards.episode_sums.zero_()
+        self._ctx = self._context(torch.zeros(self.num_envs, self.action_dim))
+        return self.observe(self._ctx)
+
     def reset(self) -> dict[str, torch.Tensor]:
         self._reset_envs(torch.arange(self.num_envs))
         self._ctx = self._context(torch.zeros(self.num_envs, self.action_dim))
@@ -205,11 +221,13 @@ class RetargetEnv:
 
     def step(self, action: torch.Tensor):
         action = torch.as_tensor(action, dtype=torch.float32).clamp(-1.0, 1.0)
+        self.total_steps += self.num_envs
         bad = torch.from_numpy(self.sim.step(action))
         sec, t0 = self.seconds, time.perf_counter()
         self.frame, clip_end = self.library.advance(self.clip, self.frame)
         self.episode_step += 1
         ctx = self._context(action)
+        self.last_context = ctx  # the step's state before any reset (evaluation reads it)
         t1 = time.perf_counter()
         reward = self.rewards.compute(ctx)
         t2 = time.perf_counter()
@@ -259,6 +277,7 @@ class RetargetEnv:
             "reward_sums": self.rewards.episode_sums.clone(),
             "generator": self.generator.get_state(),
             "nan_resets": self.nan_resets,
+            "total_steps": self.total_steps,
         }
 
     def load_state_dict(self, state: Mapping) -> dict[str, torch.Tensor]:
@@ -275,6 +294,7 @@ class RetargetEnv:
         self.rewards.episode_sums = state["reward_sums"].clone()
         self.generator.set_state(state["generator"])
         self.nan_resets = int(state["nan_resets"])
+        self.total_steps = int(state["total_steps"])
         self._ctx = self._context(self.prev_action)
         return self.observe(self._ctx)
 

@@ -163,6 +163,12 @@ def humanoid_groups(toes: bool = True) -> dict[str, tuple[str, ...]]:
         "upper_body": ("pelvis", "abdomen", "chest", "head", "l_upper_arm", "r_upper_arm"),
         "lower_body": ("l_thigh", "r_thigh", "l_shin", "r_shin", *feet),
         "end_effectors": ("head", "l_hand", "r_hand", "l_foot", "r_foot"),
+        # the 11 joints SimXR reports MPJPE on (head, shoulders, elbows, wrists, knees,
+        # ankles), as the bodies whose origins sit at those joints
+        "common_joints": (
+            "head", "l_upper_arm", "r_upper_arm", "l_forearm", "r_forearm", "l_hand",
+            "r_hand", "l_shin", "r_shin", "l_foot", "r_foot",
+        ),
     }
 
 

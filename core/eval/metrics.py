@@ -1,0 +1,103 @@
+"""Per-step tracking metrics, vectorised over environments.
+
+Device errors compare the simulated character's mounts (head, hands) with the kinematic
+reference's mounts, which for the human character are the user's devices themselves. The
+QuestEnvSim failure rule (mean headset/controller error above 0.8 m) stops counting errors and
+jerk for that run; the SimXR rule (head farther than 0.5 m from the headset at any frame) is
+tracked separately. Joint errors (MPJPE family) use the character's ``common_joints`` body
+group when it has one (the 11 joints SimXR reports).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+
+from retarget.heading import rotation_distance
+from retarget.state import Layout, StepContext
+
+CONTACT_NEWTONS = 1.0
+
+
+def procrustes_error(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+    """Mean joint error after the best similarity transform, per env: (N, J, 3) -> (N,)."""
+    mu_p, mu_t = pred.mean(1, keepdim=True), target.mean(1, keepdim=True)
+    p, t = pred - mu_p, target - mu_t
+    cov = p.transpose(1, 2) @ t
+    u, s, vh = torch.linalg.svd(cov)
+    d = torch.sign(torch.linalg.det(u @ vh))
+    flip = torch.ones_like(s)
+    flip[:, -1] = d
+    rot = u @ torch.diag_embed(flip) @ vh
+    scale = (s * flip).sum(-1) / p.square().sum((1, 2)).clamp_min(1e-12)
+    aligned = scale[:, None, None] * p @ rot + mu_t
+    return (aligned - target).norm(dim=-1).mean(-1)
+
+
+@dataclass
+class StepMetrics:
+    """Metrics of one step for every environment, all (N,) float tensors (metres, radians)."""
+
+    hmd_pos: torch.Tensor
+    hmd_rot: torch.Tensor
+    controller_pos: torch.Tensor
+    device_mean: torch.Tensor
+    head_to_headset: torch.Tensor
+    contact_agree: torch.Tensor
+    skate: torch.Tensor  # horizontal foot displacement this step while in contact, metres
+    g_mpjpe: torch.Tensor | None = None
+    mpjpe: torch.Tensor | None = None
+    pa_mpjpe: torch.Tensor | None = None
+    mpjre: torch.Tensor | None = None
+    mpjve: torch.Tensor | None = None
+
+
+class MetricProbe:
+    """Resolves indices once, then computes :class:`StepMetrics` from step contexts."""
+
+    def __init__(self, layout: Layout) -> None:
+        self.head = layout.site("head")
+        self.hands = [layout.site("left_hand"), layout.site("right_hand")]
+        groups = layout.body_groups
+        sides = ("left_foot", "right_foot")
+        self.sides = (
+            [torch.tensor(groups[s]) for s in sides] if all(s in groups for s in sides) else None
+        )
+        self.feet = torch.tensor(groups["feet"])
+        joints = groups.get("common_joints")
+        self.joints = torch.tensor(joints) if joints else None
+
+    def __call__(self, ctx: StepContext) -> StepMetrics:
+        s, r = ctx.sim, ctx.ref.pose
+        hmd = (s.site_pos[:, self.head] - r.site_pos[:, self.head]).norm(dim=-1)
+        hmd_rot = rotation_distance(r.site_quat[:, self.head], s.site_quat[:, self.head])
+        ctrl = (s.site_pos[:, self.hands] - r.site_pos[:, self.hands]).norm(dim=-1)
+        device_mean = (hmd + ctrl.sum(-1)) / 3.0
+        headset = ctx.ref.devices[:, ctx.ref.window_offsets.index(0), 0, :3]
+        head_gap = (s.site_pos[:, self.head] - headset).norm(dim=-1)
+        force = s.contact_force
+        if self.sides is not None and ctx.ref.contacts.shape[1] == 2:
+            sim_contact = torch.stack(
+                [(force[:, idx] > CONTACT_NEWTONS).any(-1) for idx in self.sides], dim=1
+            )
+            agree = (sim_contact == ctx.ref.contacts).float().mean(-1)
+        else:
+            agree = torch.full_like(hmd, float("nan"))
+        feet_down = force[:, self.feet] > CONTACT_NEWTONS
+        speed = s.body_linvel[:, self.feet, :2].norm(dim=-1) * ctx.dt
+        skate = (speed * feet_down).sum(-1) / feet_down.sum(-1).clamp_min(1)
+        out = StepMetrics(hmd, hmd_rot, ctrl.mean(-1), device_mean, head_gap, agree, skate)
+        if self.joints is not None:
+            sj, rj = s.body_pos[:, self.joints], r.body_pos[:, self.joints]
+            out.g_mpjpe = (sj - rj).norm(dim=-1).mean(-1)
+            rel_s = sj - s.site_pos[:, None, self.head]
+            rel_r = rj - r.site_pos[:, None, self.head]
+            out.mpjpe = (rel_s - rel_r).norm(dim=-1).mean(-1)
+            out.pa_mpjpe = procrustes_error(sj, rj)
+            out.mpjre = rotation_distance(
+                r.body_quat[:, self.joints], s.body_quat[:, self.joints]
+            ).mean(-1)
+            dv = s.body_linvel[:, self.joints] - r.body_linvel[:, self.joints]
+            out.mpjve = dv.norm(dim=-1).mean(-1) * ctx.dt
+        return out
