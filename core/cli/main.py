@@ -15,7 +15,7 @@ import warnings
 from collections.abc import Sequence
 
 import retarget
-from retarget.cli import plugins_cmd, recipe_cmd
+from retarget.cli import plugins_cmd, recipe_cmd, train_cmd
 from retarget.cli.console import error, warning
 from retarget.errors import RetargetError
 from retarget.kinds import Command
@@ -40,6 +40,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="verb", metavar="COMMAND")
     plugins_cmd.add_parser(sub)
     recipe_cmd.add_parser(sub)
+    train_cmd.add_parser(sub)
     for name in registry.names("command"):
         entry = registry.get("command", name)
         _add_plugin_command(sub, entry.cls, entry.plugin)

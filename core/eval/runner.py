@@ -68,7 +68,7 @@ def evaluate(
     dt = env.options.sim.control_dt
     clips, frames = _starts(env, cfg.every)
     runs = len(clips)
-    max_steps = int(round(cfg.max_seconds / dt))
+    max_steps = round(cfg.max_seconds / dt)
     per_run: dict[str, np.ndarray] = {}
     wall, simulated = 0.0, 0.0
     for begin in range(0, runs, env.num_envs):

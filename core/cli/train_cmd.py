@@ -1,0 +1,118 @@
+"""``retarget train``: train a policy from a recipe (or the packaged default plus flags)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import yaml
+from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeRemainingColumn
+
+from retarget.cli.console import out, warning
+from retarget.cli.recipe_cmd import add_recipe_flags, load_from_args
+from retarget.errors import RecipeError
+from retarget.recipe import parse_text, resolve
+from retarget.registry import Registry
+from retarget.train.run_dir import (
+    LOCK,
+    default_run_name,
+    latest_checkpoint,
+    new_run_dir,
+    resolve_run,
+)
+from retarget.train.runner import Budget, Trainer
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    parser = sub.add_parser("train", help="train a policy (PPO by default)")
+    add_recipe_flags(parser)
+    parser.add_argument("--steps", type=int, help="stop after this many environment steps")
+    parser.add_argument("--minutes", type=float, help="stop after this many minutes")
+    parser.add_argument("--resume", metavar="RUN", help="continue a run (runs/NAME/latest)")
+    parser.add_argument("--runs-dir", default="runs", help="where run directories go")
+    parser.add_argument("--num-envs", type=int, help="override env.num_envs")
+    parser.add_argument("--checkpoint-every", type=int, default=10, help="iterations")
+    parser.add_argument("--no-tensorboard", action="store_true", help="CSV logs only")
+    parser.set_defaults(handler=run)
+
+
+def _resume_recipe(run: Path, registry: Registry):  # noqa: ANN202
+    data = yaml.safe_load((run / LOCK).read_text())
+    lock = data.pop("_lock", {})
+    source = parse_text(yaml.safe_dump(data, sort_keys=False), str(run / LOCK), ".yaml")
+    resolved = resolve(source, registry)
+    for path, info in lock.get("plugins", {}).items():
+        comp = resolved.components.get(path)
+        if comp is not None and comp.entry.version != info.get("version"):
+            warning(
+                f"{path}: plugin '{comp.entry.name}' is {comp.entry.distribution} "
+                f"{comp.entry.version}, the run started with {info.get('version')}"
+            )
+    return resolved
+
+
+def run(args: argparse.Namespace, registry: Registry) -> int:
+    if args.steps is None and args.minutes is None and args.resume is None:
+        out.print("no --steps or --minutes given: training until Ctrl-C (checkpoint on exit)")
+    if args.resume:
+        run_dir = resolve_run(args.resume)
+        if args.recipe or args.assignments:
+            raise RecipeError(
+                "--resume continues with the run's own recipe.lock.yaml; "
+                "recipe files and --set do not apply",
+                file=str(run_dir / LOCK),
+            )
+        resolved = _resume_recipe(run_dir, registry)
+    else:
+        resolved = load_from_args(args, registry)
+        name = resolved.recipe.name or default_run_name(
+            resolved.character.entry.name, [c.entry.name for c in resolved.of_kind("sensor")]
+        )
+        run_dir = new_run_dir(args.runs_dir, name)
+    trainer = Trainer(
+        resolved,
+        run_dir,
+        num_envs=args.num_envs,
+        checkpoint_every=args.checkpoint_every,
+        tensorboard=not args.no_tensorboard,
+    )
+    if args.resume:
+        ckpt = latest_checkpoint(run_dir)
+        trainer.restore(ckpt)
+        out.print(f"resumed {ckpt} at {trainer.progress.env_steps} steps")
+    out.print(
+        f"run directory: {run_dir}  ({trainer.env.num_envs} envs, "
+        f"{trainer.env.character.name}, obs {dict(trainer.env.obs_dims)})"
+    )
+    budget = Budget(steps=args.steps, minutes=args.minutes)
+    total = args.steps if args.steps is not None else None
+    columns = [
+        TextColumn("[bold]train"),
+        BarColumn(),
+        TaskProgressColumn(),
+        TextColumn(
+            "{task.fields[rate]:>6.0f} steps/s  return {task.fields[ret]:>7.2f}  "
+            "ep len {task.fields[len]:>5.1f}"
+        ),
+        TimeRemainingColumn(),
+    ]
+    minutes_total = 60.0 * args.minutes if args.minutes is not None else None
+    with Progress(*columns, console=out, transient=False) as bar:
+        task = bar.add_task("train", total=total or minutes_total, rate=0.0, ret=0.0, len=0.0)
+
+        def update(p) -> None:  # noqa: ANN001
+            done = p.env_steps if total is not None else p.elapsed
+            bar.update(
+                task,
+                completed=done if (total or minutes_total) else None,
+                rate=p.last.get("steps_per_s_total", 0.0),
+                ret=p.last.get("episode_return", 0.0),
+                len=p.last.get("episode_length", 0.0),
+            )
+
+        last = trainer.train(budget, on_iteration=update)
+    out.print(
+        f"stopped ({trainer.stop_reason}) after {trainer.progress.iteration} iterations, "
+        f"{trainer.progress.env_steps} steps; checkpoint {last}"
+    )
+    return 130 if trainer.stop_reason == "interrupted" else 0

@@ -1,0 +1,1 @@
+"""Training runs: run directories, logs, the training loop and resuming."""

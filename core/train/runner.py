@@ -1,0 +1,160 @@
+"""The training loop behind ``retarget train``: iterate, log, checkpoint, stop, resume.
+
+Stopping is cooperative: Ctrl-C (SIGINT) or SIGTERM sets a flag that the loop checks after
+each iteration, so the checkpoint written on the way out is of a complete iteration. A second
+Ctrl-C aborts at once. Checkpoints are written atomically (temp file, fsync, rename), so a run
+killed mid-write keeps its previous checkpoint.
+"""
+
+from __future__ import annotations
+
+import random
+import signal
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+import numpy as np
+import torch
+
+from retarget.checkpoint import load_checkpoint, save_checkpoint
+from retarget.env.build import env_from_recipe
+from retarget.errors import RecipeError
+from retarget.kinds import Algorithm
+from retarget.recipe import ResolvedRecipe, write_lock
+from retarget.train.logger import MetricsLogger
+from retarget.train.run_dir import CHECKPOINTS
+
+
+@dataclass
+class Budget:
+    """When to stop: total environment steps and/or wall-clock minutes (None: no bound)."""
+
+    steps: int | None = None
+    minutes: float | None = None
+
+    def done(self, env_steps: int, elapsed: float) -> bool:
+        if self.steps is not None and env_steps >= self.steps:
+            return True
+        return self.minutes is not None and elapsed >= 60.0 * self.minutes
+
+
+@dataclass
+class Progress:
+    """Counters that survive a resume."""
+
+    iteration: int = 0
+    env_steps: int = 0
+    elapsed: float = 0.0
+    last: dict[str, float] = field(default_factory=dict)
+
+
+def seed_everything(seed: int) -> torch.Generator:
+    random.seed(seed)
+    np.random.seed(seed % 2**32)
+    torch.manual_seed(seed)
+    return torch.Generator().manual_seed(seed)
+
+
+class Trainer:
+    """Owns the env, the algorithm, the logger and the run directory of one training run."""
+
+    def __init__(
+        self,
+        resolved: ResolvedRecipe,
+        run: Path,
+        *,
+        num_envs: int | None = None,
+        checkpoint_every: int = 10,
+        tensorboard: bool = True,
+    ) -> None:
+        if "algorithm" not in resolved.components:
+            raise RecipeError(
+                "training needs an algorithm",
+                file=resolved.source.path,
+                field="algorithm",
+                hint="add `algorithm: ppo` to the recipe or pass --algorithm ppo",
+            )
+        self.resolved, self.run = resolved, run
+        self.checkpoint_every = checkpoint_every
+        generator = seed_everything(resolved.recipe.seed)
+        self.env = env_from_recipe(resolved, num_envs=num_envs)
+        algorithm = resolved.component("algorithm").instantiate()
+        assert isinstance(algorithm, Algorithm)
+        self.algorithm = algorithm
+        self.algorithm.setup(self.env, generator)
+        self.progress = Progress()
+        self.logger = MetricsLogger(run, tensorboard=tensorboard)
+        write_lock(resolved, run)
+        self._stop_requests = 0
+
+    # ------------------------------------------------------------------ checkpoints
+
+    def state(self) -> dict[str, Any]:
+        return {
+            "algorithm": self.algorithm.state_dict(),
+            "env": self.env.state_dict(),
+            "progress": vars(self.progress).copy(),
+            "rng": {
+                "torch": torch.get_rng_state(),
+                "numpy": np.random.get_state(),
+                "python": random.getstate(),
+            },
+        }
+
+    def save(self) -> Path:
+        path = self.run / CHECKPOINTS / f"ckpt-{self.progress.iteration:07d}.pt"
+        save_checkpoint(path, self.state())
+        return path
+
+    def restore(self, path: Path) -> None:
+        state = load_checkpoint(path)
+        self.algorithm.load_state_dict(state["algorithm"])
+        self.env.load_state_dict(state["env"])
+        self.progress = Progress(**state["progress"])
+        torch.set_rng_state(state["rng"]["torch"])
+        np.random.set_state(state["rng"]["numpy"])
+        random.setstate(state["rng"]["python"])
+
+    # ------------------------------------------------------------------ loop
+
+    def _request_stop(self, signum: int, frame: FrameType | None) -> None:
+        self._stop_requests += 1
+        if self._stop_requests > 1:
+            raise KeyboardInterrupt
+        self.stop_reason = "interrupted"
+
+    def train(self, budget: Budget, on_iteration: Callable[[Progress], None] | None = None) -> Path:
+        """Run until the budget is spent or a stop is requested; returns the last checkpoint."""
+        self.stop_reason = "budget"
+        previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+        for sig in previous:
+            signal.signal(sig, self._request_stop)
+        last = None
+        try:
+            start = time.perf_counter() - self.progress.elapsed
+            while not budget.done(self.progress.env_steps, self.progress.elapsed):
+                before = self.env.total_steps
+                stats = self.algorithm.train_iteration(self.env)
+                p = self.progress
+                p.iteration += 1
+                p.env_steps += self.env.total_steps - before
+                p.elapsed = time.perf_counter() - start
+                p.last = {k: float(v) for k, v in stats.items()}
+                p.last["steps_per_s_total"] = p.env_steps / max(p.elapsed, 1e-9)
+                self.logger.log(p.env_steps, {"iteration": p.iteration, **p.last})
+                if on_iteration is not None:
+                    on_iteration(p)
+                if self._stop_requests:
+                    break
+                if p.iteration % self.checkpoint_every == 0:
+                    last = self.save()
+            last = self.save()
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
+            self.logger.close()
+        return last
