@@ -47,5 +47,5 @@ def load_checkpoint(path: str | Path) -> dict[str, Any]:
             return torch.load(handle, map_location="cpu", weights_only=False)
     except FileNotFoundError:
         raise RetargetError("checkpoint not found", file=str(path)) from None
-    except Exception as exc:  # noqa: BLE001 - torn or foreign files
+    except Exception as exc:
         raise RetargetError(f"cannot read checkpoint: {exc}", file=str(path)) from None

@@ -36,7 +36,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
 
 
-def _resume_recipe(run: Path, registry: Registry):  # noqa: ANN202
+def _resume_recipe(run: Path, registry: Registry):
     data = yaml.safe_load((run / LOCK).read_text())
     lock = data.pop("_lock", {})
     source = parse_text(yaml.safe_dump(data, sort_keys=False), str(run / LOCK), ".yaml")
@@ -100,7 +100,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     with Progress(*columns, console=out, transient=False) as bar:
         task = bar.add_task("train", total=total or minutes_total, rate=0.0, ret=0.0, len=0.0)
 
-        def update(p) -> None:  # noqa: ANN001
+        def update(p) -> None:
             done = p.env_steps if total is not None else p.elapsed
             bar.update(
                 task,
