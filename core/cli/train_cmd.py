@@ -5,14 +5,13 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-import yaml
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeRemainingColumn
 
 from retarget.cli.console import out, warning
 from retarget.cli.recipe_cmd import add_recipe_flags, load_from_args
 from retarget.errors import RecipeError
-from retarget.recipe import parse_text, resolve
 from retarget.registry import Registry
+from retarget.train.load import locked_recipe
 from retarget.train.run_dir import (
     LOCK,
     default_run_name,
@@ -37,10 +36,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def _resume_recipe(run: Path, registry: Registry):
-    data = yaml.safe_load((run / LOCK).read_text())
-    lock = data.pop("_lock", {})
-    source = parse_text(yaml.safe_dump(data, sort_keys=False), str(run / LOCK), ".yaml")
-    resolved = resolve(source, registry)
+    resolved, lock = locked_recipe(run, registry)
     for path, info in lock.get("plugins", {}).items():
         comp = resolved.components.get(path)
         if comp is not None and comp.entry.version != info.get("version"):

@@ -53,7 +53,7 @@ def _color(j: int) -> tuple[float, ...]:
     return _LEFT if name.startswith("left") else _RIGHT if name.startswith("right") else _MID
 
 
-def _add_geom(
+def add_decor_geom(
     mujoco,
     scene,
     kind: int,
@@ -138,7 +138,7 @@ def render_frames(
                 to: np.ndarray | None = None,
                 scene=scene,
             ) -> None:
-                _add_geom(mujoco, scene, kind, size, at, rgba, to)
+                add_decor_geom(mujoco, scene, kind, size, at, rgba, to)
 
             for j in range(1, sk.NUM_JOINTS):
                 a, b = p[sk.PARENTS[j]], p[j]

@@ -1,0 +1,60 @@
+"""``retarget play RUN [RUN...] --motions CLIP --out X.gif``: videos of trained policies."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from retarget.character_view import label, save_video
+from retarget.cli.console import out
+from retarget.errors import RetargetError
+from retarget.play import render_rollout
+from retarget.registry import Registry
+from retarget.train.load import load_run
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    parser = sub.add_parser("play", help="render a trained policy (several runs side by side)")
+    parser.add_argument("runs", nargs="+", help="run directories (runs/NAME/latest)")
+    parser.add_argument("--motions", help="clip to play (default: the run's first clip)")
+    parser.add_argument("--clip", type=int, default=0, help="index of the clip when a directory")
+    parser.add_argument("--out", required=True, help="output .gif, .mp4 or .png")
+    parser.add_argument("--seconds", type=float, default=8.0)
+    parser.add_argument("--start", type=float, default=0.0, help="start time in the clip, s")
+    parser.add_argument("--size", default="480x360", help="WIDTHxHEIGHT of each view")
+    parser.add_argument("--ghost-offset", type=float, default=0.0, help="ghost shift, m")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace, registry: Registry) -> int:
+    try:
+        width, height = (int(v) for v in args.size.lower().split("x"))
+    except ValueError:
+        raise RetargetError(f"--size expects WIDTHxHEIGHT, got '{args.size}'") from None
+    views = []
+    for path in args.runs:
+        loaded = load_run(path, registry, num_envs=1, motions=args.motions)
+        env = loaded.env
+        if not 0 <= args.clip < env.library.num_clips:
+            raise RetargetError(f"--clip {args.clip}: the motions hold {env.library.num_clips}")
+        start = int(args.start * env.options.sim.control_hz)
+        frames = render_rollout(
+            env,
+            loaded.algorithm.act,
+            args.clip,
+            start=start,
+            seconds=args.seconds,
+            width=width,
+            height=height,
+            ghost_offset=args.ghost_offset,
+        )
+        name = f"{env.character.name}: {env.library.names[args.clip]}"
+        views.append([label(f, [(0.5, 0.06, name)]) for f in frames])
+    count = min(len(v) for v in views)
+    frames = [np.concatenate([v[i] for v in views], axis=1) for i in range(count)]
+    out_path = Path(args.out)
+    save_video(frames, out_path, fps=36.0)
+    out.print(f"wrote {out_path} ({count} frames)")
+    return 0

@@ -1,0 +1,64 @@
+"""Videos of a policy: the simulated character, the human reference as a ghost skeleton, and
+the user's devices as markers, rendered offscreen (OSMesa on CPU) for people to look at."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import mujoco
+import numpy as np
+import torch
+
+from retarget.character_view import FrameRenderer
+from retarget.env import RetargetEnv
+from retarget.motion import skeleton as sk
+from retarget.motion.render import add_decor_geom
+
+GHOST = (0.2, 0.45, 0.95, 0.55)
+DEVICE = (1.0, 0.85, 0.1, 1.0)
+
+
+def render_rollout(
+    env: RetargetEnv,
+    policy: Callable[[Mapping[str, torch.Tensor]], torch.Tensor],
+    clip: int,
+    *,
+    start: int = 0,
+    seconds: float = 8.0,
+    width: int = 480,
+    height: int = 360,
+    ghost_offset: float = 0.0,
+) -> list[np.ndarray]:
+    """Run ``policy`` in environment 0 from ``(clip, start)`` and render every control step.
+
+    The ghost is the human reference motion (shifted sideways by ``ghost_offset`` metres,
+    overlaid when 0); yellow boxes are the headset and controllers the policy was given.
+    """
+    model = env.world.model
+    data = mujoco.MjData(model)
+    lib = env.library
+    steps = int(min(seconds * env.options.sim.control_hz, int(lib.length[clip]) - 1 - start))
+    n = env.num_envs
+    obs = env.place(torch.full((n,), clip), torch.full((n,), start))
+    cam = mujoco.MjvCamera()
+    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+    cam.distance, cam.elevation, cam.azimuth = 4.0, -15.0, 135.0
+    shift = np.array([0.0, ghost_offset, 0.0])
+    frames = []
+    with FrameRenderer(model, width, height) as render, torch.no_grad():
+        for _ in range(max(steps, 1)):
+            obs, *_ = env.step(policy(obs))
+            row = int(lib.rows(env.clip[:1], env.frame[:1])[0, 0])
+            data.qpos[:] = env.sim.raw("qpos")[0]
+            mujoco.mj_kinematics(model, data)
+            cam.lookat[:] = [data.qpos[0], data.qpos[1], 0.9]
+            render.renderer.update_scene(data, camera=cam)
+            scene = render.renderer.scene
+            human = lib.global_pos[row].numpy() + shift
+            for j in range(1, sk.NUM_JOINTS):
+                a, b = human[sk.PARENTS[j]], human[j]
+                add_decor_geom(mujoco, scene, mujoco.mjtGeom.mjGEOM_CAPSULE, [0.025], a, GHOST, b)
+            for d in lib.devices[row].numpy():
+                add_decor_geom(mujoco, scene, mujoco.mjtGeom.mjGEOM_BOX, [0.035] * 3, d[:3], DEVICE)
+            frames.append(render.renderer.render().copy())
+    return frames
