@@ -1,0 +1,69 @@
+"""PPO settings: the paper's Table 3 values, plus what this project had to decide itself.
+
+Decisions (measured figures in ``docs/learning.md``):
+
+* **Exploration noise 0.02 is read as the variance** of the fixed Gaussian, i.e. a standard
+  deviation of sqrt(0.02) = 0.141 on actions in [-1, 1]. Read as a standard deviation it would
+  be 1 % of the torque range, which with the paper's 4096 environments may still give a usable
+  gradient but with this machine's few hundred gives almost none. ``noise_parameter: std``
+  switches to the other reading; ``learn_std: true`` lets the optimiser adapt it.
+* **Batch size 8192 is the minibatch size.** The paper collects 4096 envs x 16 steps = 65,536
+  samples per iteration, i.e. 8 minibatches of 8192 per epoch. Here the default rollout is
+  ``num_envs x rollout_steps`` = 8192 samples: one minibatch per epoch, which keeps the
+  paper's minibatch size *and* its ratio of gradient steps to samples (5 per 8192).
+* **Value normalisation** (on by default): the critic predicts returns scaled by running
+  statistics. Per-step rewards here reach ~14 and gamma 0.97 makes returns of several hundred,
+  so a value clip of 0.2 in raw units would let the critic move 0.2 per iteration; in
+  normalised units the clip means 0.2 standard deviations, as intended.
+* **Threads**: collection on 1 torch thread (torch's intra-op threads spin between the
+  environment's small tensor ops and slow MuJoCo's 2-thread pool by ~40 %), the update on 2
+  (1.8x faster than 1 for these network sizes; measured in perf_baseline.md and again here).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from pydantic import Field
+
+from retarget.kinds import PluginConfig
+
+
+class PPOConfig(PluginConfig):
+    """PPO hyper-parameters (defaults: paper Table 3, environment count for this machine)."""
+
+    num_envs: int = Field(256, gt=0, description="environments stepped together (measured)")
+    rollout_steps: int = Field(32, gt=0, description="steps per env per iteration (measured)")
+    learning_rate: float = Field(1.2e-4, gt=0)
+    gamma: float = Field(0.97, ge=0, lt=1)
+    lam: float = Field(0.95, ge=0, le=1, description="GAE lambda")
+    epochs: int = Field(5, gt=0)
+    minibatch_size: int = Field(8192, gt=0, description="samples per gradient step")
+    clip: float = Field(0.2, gt=0, description="policy ratio clip")
+    value_clip: float | None = Field(0.2, gt=0, description="value change clip; null: none")
+    value_loss_coef: float = Field(0.2, ge=0)
+    entropy_coef: float = Field(0.0, ge=0)
+    max_grad_norm: float = Field(1.0, gt=0)
+    exploration_noise: float = Field(0.02, gt=0)
+    noise_parameter: Literal["variance", "std"] = "variance"
+    learn_std: bool = False
+    activation: Literal["tanh", "elu", "relu"] = "tanh"
+    actor_hidden: tuple[int, ...] = (300, 200, 100)
+    critic_hidden: tuple[int, ...] = (400, 400, 300, 200)
+    normalize_obs: bool = True
+    obs_clip: float = Field(10.0, gt=0)
+    normalize_values: bool = True
+    normalize_advantages: bool = True
+    actor_group: str = "actor"
+    critic_group: str = "critic"
+    collect_threads: int = Field(1, ge=0, description="torch threads while acting; 0: leave")
+    update_threads: int = Field(2, ge=0, description="torch threads while updating; 0: leave")
+    episode_window: int = Field(100, gt=0, description="finished episodes averaged in stats")
+
+    @property
+    def init_std(self) -> float:
+        """The Gaussian's standard deviation implied by ``exploration_noise``."""
+        if self.noise_parameter == "variance":
+            return math.sqrt(self.exploration_noise)
+        return self.exploration_noise

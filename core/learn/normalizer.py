@@ -1,0 +1,73 @@
+"""Running mean/variance observation normalisation, one normaliser per observation group.
+
+Observations mix metres, radians, m/s and newtons; without scaling the tanh layers saturate on
+the large ones. Statistics are accumulated in float64 (Chan et al.'s parallel merge) so that
+millions of samples do not lose precision, and applied in float32. The statistics only change
+when :meth:`RunningNormalizer.update` is called: PPO updates them once per rollout, so every
+observation of one rollout is scaled the same way.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import torch
+from torch import nn
+
+
+class RunningNormalizer(nn.Module):
+    """``(x - mean) / sqrt(var + eps)``, clipped to ``[-clip, clip]``."""
+
+    def __init__(
+        self, dim: int, *, clip: float = 10.0, eps: float = 1e-8, max_count: float | None = None
+    ) -> None:
+        super().__init__()
+        self.clip, self.eps, self.max_count = clip, eps, max_count
+        self.register_buffer("mean", torch.zeros(dim, dtype=torch.float64))
+        self.register_buffer("var", torch.ones(dim, dtype=torch.float64))
+        self.register_buffer("count", torch.zeros((), dtype=torch.float64))
+
+    @torch.no_grad()
+    def update(self, x: torch.Tensor) -> None:
+        """Merge the statistics of a batch ``(..., dim)`` into the running ones."""
+        x = x.reshape(-1, x.shape[-1]).double()
+        if x.shape[0]:
+            self.merge(x.shape[0], x.mean(0), x.var(0, unbiased=False))
+
+    @torch.no_grad()
+    def merge(self, n: float | torch.Tensor, mean: torch.Tensor, var: torch.Tensor) -> None:
+        """Merge statistics of ``n`` samples (Chan et al.). With ``max_count`` the running
+        count saturates, so old samples fade out: statistics that drift during training (the
+        returns of an improving policy) are followed instead of averaged over all history."""
+        total = self.count + n
+        delta = mean - self.mean
+        m2 = self.var * self.count + var * n + delta.square() * self.count * n / total
+        self.mean += delta * n / total
+        self.var.copy_(m2 / total)
+        self.count.copy_(total if self.max_count is None else total.clamp(max=self.max_count))
+
+    def raw_stats(self) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """``(count, mean, var)`` for merging into another normaliser."""
+        return self.count.clone(), self.mean.clone(), self.var.clone()
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        scale = (self.var + self.eps).rsqrt().float()
+        return ((x - self.mean.float()) * scale).clamp(-self.clip, self.clip)
+
+
+class GroupNormalizer(nn.Module):
+    """A :class:`RunningNormalizer` per observation group (``actor``, ``critic``, ...)."""
+
+    def __init__(self, dims: Mapping[str, int], *, clip: float = 10.0) -> None:
+        super().__init__()
+        self.groups = nn.ModuleDict({k: RunningNormalizer(d, clip=clip) for k, d in dims.items()})
+
+    def update(self, obs: Mapping[str, torch.Tensor]) -> None:
+        for key, norm in self.groups.items():
+            norm.update(obs[key])
+
+    def forward(self, obs: Mapping[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        return {key: norm(obs[key]) for key, norm in self.groups.items()}
+
+    def group(self, key: str, x: torch.Tensor) -> torch.Tensor:
+        return self.groups[key](x)

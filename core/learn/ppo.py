@@ -1,0 +1,327 @@
+"""PPO with an asymmetric critic: collection, GAE and the clipped update.
+
+The actor reads the ``actor`` observation group (what a headset user can provide); the critic
+reads ``critic`` (privileged simulation state), which only training needs. Everything random
+(weight init, action noise, minibatch order) draws from one private ``torch.Generator``
+seeded from the one given to :meth:`PPOLearner.__init__`, and its state is part of
+:meth:`state_dict`, so a resumed run continues bit-for-bit.
+
+Environment contract used here (see :class:`retarget.kinds.VecEnv`): ``step`` auto-resets
+finished environments, and when some were *truncated* (time limit, clip end) it may return
+``info["final_obs"]``: a mapping group -> ``(N, D)`` whose rows for the truncated environments
+hold the observation they ended in (other rows are ignored). Their value is bootstrapped from
+it. Without that key, truncated environments are bootstrapped from the returned (already
+reset) observation, an approximation that is exact only when observations do not depend on
+the episode (as in ``FakeVecEnv``).
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Mapping
+from contextlib import contextmanager
+from typing import Any
+
+import torch
+from torch import nn
+
+from retarget.kinds import VecEnv
+from retarget.learn.config import PPOConfig
+from retarget.learn.networks import Critic, GaussianActor
+from retarget.learn.normalizer import GroupNormalizer, RunningNormalizer
+from retarget.learn.storage import RolloutStorage
+
+
+@contextmanager
+def torch_threads(count: int):
+    """Run a block with ``count`` intra-op threads (0: unchanged), then restore."""
+    previous = torch.get_num_threads()
+    if count and count != previous:
+        torch.set_num_threads(count)
+    try:
+        yield
+    finally:
+        if torch.get_num_threads() != previous:
+            torch.set_num_threads(previous)
+
+
+class PPOLearner:
+    """Networks, optimiser, normalisers, storage and counters of one PPO run."""
+
+    def __init__(
+        self,
+        config: PPOConfig,
+        obs_dims: Mapping[str, int],
+        action_dim: int,
+        num_envs: int,
+        generator: torch.Generator | None = None,
+    ) -> None:
+        self.config = c = config
+        seed = torch.randint(0, 2**62, (1,), generator=generator).item()
+        self.generator = torch.Generator().manual_seed(int(seed))
+        if c.actor_group not in obs_dims:
+            raise ValueError(f"the env has no {c.actor_group!r} observation group: {obs_dims}")
+        self.actor_key = c.actor_group
+        # without a privileged group the critic sees what the actor sees (symmetric PPO)
+        self.critic_key = c.critic_group if c.critic_group in obs_dims else c.actor_group
+        dims = {k: int(obs_dims[k]) for k in dict.fromkeys((self.actor_key, self.critic_key))}
+        self.num_envs, self.action_dim = num_envs, action_dim
+        self.actor = GaussianActor(
+            dims[self.actor_key],
+            action_dim,
+            c.actor_hidden,
+            activation=c.activation,
+            init_std=c.init_std,
+            learn_std=c.learn_std,
+            generator=self.generator,
+        )
+        self.critic = Critic(
+            dims[self.critic_key],
+            c.critic_hidden,
+            activation=c.activation,
+            generator=self.generator,
+        )
+        self.obs_norm = GroupNormalizer(dims, clip=c.obs_clip)
+        # return statistics follow the improving policy: ~20 iterations of memory
+        samples = c.rollout_steps * num_envs
+        self.value_norm = RunningNormalizer(1, clip=float("inf"), max_count=20.0 * samples)
+        params = [*self.actor.parameters(), *self.critic.parameters()]
+        self.params = params
+        self.optimizer = torch.optim.Adam(params, lr=c.learning_rate)
+        self.storage = RolloutStorage(c.rollout_steps, num_envs, dims, action_dim)
+        self.last_obs: dict[str, torch.Tensor] | None = None
+        self.episode_return = torch.zeros(num_envs)
+        self.episode_length = torch.zeros(num_envs, dtype=torch.long)
+        self.finished_returns: deque[float] = deque(maxlen=c.episode_window)
+        self.finished_lengths: deque[float] = deque(maxlen=c.episode_window)
+        self.iteration = 0
+        self.env_steps = 0
+
+    # ------------------------------------------------------------------ helpers
+
+    def _normalize(self, key: str, x: torch.Tensor) -> torch.Tensor:
+        return self.obs_norm.group(key, x) if self.config.normalize_obs else x
+
+    def _value(self, critic_obs: torch.Tensor) -> torch.Tensor:
+        """Value in reward units of already-normalised critic observations."""
+        v = self.critic(critic_obs)
+        if self.config.normalize_values:
+            v = v * self.value_norm.var.sqrt().float() + self.value_norm.mean.float()
+        return v
+
+    @torch.no_grad()
+    def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
+        """The deterministic policy (the Gaussian's mean) in [-1, 1]."""
+        x = self._normalize(self.actor_key, obs[self.actor_key].float())
+        return self.actor(x).clamp(-1.0, 1.0)
+
+    # ------------------------------------------------------------------ collection
+
+    @torch.no_grad()
+    def collect(self, env: VecEnv) -> dict[str, float]:
+        c, st = self.config, self.storage
+        if self.last_obs is None:
+            self.last_obs = {k: v.float() for k, v in env.reset().items()}
+            if c.normalize_obs and int(self.obs_norm.groups[self.actor_key].count) == 0:
+                self.obs_norm.update(self.last_obs)
+        obs = self.last_obs
+        st.clear()
+        finished_returns: list[torch.Tensor] = []
+        finished_lengths: list[torch.Tensor] = []
+        std = self.actor.std()
+        # raw observation statistics of this rollout, merged into the normaliser at its end
+        pending = GroupNormalizer({k: v.shape[-1] for k, v in st.obs.items()})
+        for _ in range(c.rollout_steps):
+            if c.normalize_obs:
+                pending.update(obs)
+            a_obs = self._normalize(self.actor_key, obs[self.actor_key])
+            c_obs = self._normalize(self.critic_key, obs[self.critic_key])
+            mean = self.actor(a_obs)
+            noise = torch.randn(mean.shape, generator=self.generator)
+            action = mean + noise * std
+            log_prob = self.actor.log_prob(mean, action)
+            value = self._value(c_obs)
+            next_obs, reward, terminated, truncated, info = env.step(action)
+            reward = reward.float()
+            terminated, truncated = terminated.bool(), truncated.bool() & ~terminated.bool()
+            bootstrap = None
+            if truncated.any():
+                final = info.get("final_obs", next_obs)[self.critic_key].float()
+                bootstrap = torch.where(
+                    truncated, self._value(self._normalize(self.critic_key, final)), 0.0
+                )
+            st.add(
+                {self.actor_key: a_obs, self.critic_key: c_obs},
+                action,
+                log_prob,
+                value,
+                reward,
+                terminated,
+                truncated,
+                bootstrap,
+            )
+            self.episode_return += reward
+            self.episode_length += 1
+            done = terminated | truncated
+            if done.any():
+                finished_returns.append(self.episode_return[done].clone())
+                finished_lengths.append(self.episode_length[done].clone())
+                self.episode_return[done] = 0.0
+                self.episode_length[done] = 0
+            obs = {k: v.float() for k, v in next_obs.items()}
+        self.last_obs = obs
+        last_values = self._value(self._normalize(self.critic_key, obs[self.critic_key]))
+        st.compute_returns(last_values, c.gamma, c.lam)
+        if c.normalize_obs:
+            for key, norm in self.obs_norm.groups.items():
+                norm.merge(*pending.groups[key].raw_stats())
+        if c.normalize_values:
+            self._update_value_stats(st.returns)
+        if finished_returns:
+            self.finished_returns.extend(torch.cat(finished_returns).tolist())
+            self.finished_lengths.extend(torch.cat(finished_lengths).float().tolist())
+        return {
+            "mean_reward": float(st.rewards.mean()),
+            "episodes_finished": float(sum(len(r) for r in finished_returns)),
+        }
+
+    @torch.no_grad()
+    def _update_value_stats(self, returns: torch.Tensor) -> None:
+        """Move the return statistics and rescale the critic's output layer so that its
+        predictions in reward units do not change (PopArt): the stored values of this
+        rollout stay consistent with the critic the update starts from."""
+        norm = self.value_norm
+        old_mean, old_std = norm.mean.clone(), norm.var.sqrt()
+        norm.update(returns.reshape(-1, 1))
+        new_mean, new_std = norm.mean, norm.var.sqrt()
+        last = self.critic.net[-1]
+        assert isinstance(last, nn.Linear)
+        last.weight.mul_((old_std / new_std).float())
+        last.bias.copy_(((old_std * last.bias.double() + old_mean - new_mean) / new_std).float())
+
+    # ------------------------------------------------------------------ update
+
+    def update(self) -> dict[str, float]:
+        c, st = self.config, self.storage
+        if c.normalize_advantages:
+            adv = st.advantages
+            st.advantages.copy_((adv - adv.mean()) / (adv.std() + 1e-8))
+        total = st.steps * st.num_envs
+        count = max(1, round(total / c.minibatch_size))
+        sums = dict.fromkeys(("policy_loss", "value_loss", "approx_kl", "clip_fraction"), 0.0)
+        grad_norm, n = 0.0, 0
+        v_mean, v_std = self.value_norm.mean.float(), self.value_norm.var.sqrt().float()
+        for _ in range(c.epochs):
+            for mb in st.minibatches(count, self.generator):
+                mean = self.actor(mb[f"obs/{self.actor_key}"])
+                log_prob = self.actor.log_prob(mean, mb["actions"])
+                log_ratio = log_prob - mb["log_probs"]
+                ratio = log_ratio.exp()
+                adv = mb["advantages"]
+                surrogate = torch.min(ratio * adv, ratio.clamp(1 - c.clip, 1 + c.clip) * adv)
+                policy_loss = -surrogate.mean()
+                value, old, target = (
+                    self.critic(mb[f"obs/{self.critic_key}"]),
+                    mb["values"],
+                    mb["returns"],
+                )
+                if c.normalize_values:
+                    old, target = (old - v_mean) / v_std, (target - v_mean) / v_std
+                value_loss = (value - target).square()
+                if c.value_clip is not None:
+                    clipped = old + (value - old).clamp(-c.value_clip, c.value_clip)
+                    value_loss = torch.max(value_loss, (clipped - target).square())
+                value_loss = value_loss.mean()
+                loss = policy_loss + c.value_loss_coef * value_loss
+                if c.entropy_coef:
+                    loss = loss - c.entropy_coef * self.actor.entropy()
+                self.optimizer.zero_grad(set_to_none=True)
+                loss.backward()
+                grad_norm += float(nn.utils.clip_grad_norm_(self.params, c.max_grad_norm))
+                self.optimizer.step()
+                with torch.no_grad():
+                    sums["policy_loss"] += float(policy_loss)
+                    sums["value_loss"] += float(value_loss)
+                    sums["approx_kl"] += float(((ratio - 1) - log_ratio).mean())
+                    sums["clip_fraction"] += float(((ratio - 1).abs() > c.clip).float().mean())
+                n += 1
+        stats = {k: v / n for k, v in sums.items()}
+        stats["grad_norm"] = grad_norm / n
+        stats["gradient_steps"] = float(n)
+        return stats
+
+    def explained_variance(self) -> float:
+        """1 - Var(returns - values) / Var(returns) of the rollout just collected."""
+        returns, values = self.storage.returns, self.storage.values
+        var = float(returns.var())
+        return float(1.0 - (returns - values).var() / var) if var > 1e-12 else 0.0
+
+    def train_iteration(self, env: VecEnv) -> dict[str, float]:
+        """Collect ``rollout_steps`` steps from ``env`` and run the PPO update on them."""
+        c = self.config
+        samples = c.rollout_steps * self.num_envs
+        with torch_threads(c.collect_threads):
+            t0 = time.perf_counter()
+            stats = self.collect(env)
+            t1 = time.perf_counter()
+        explained = self.explained_variance()
+        with torch_threads(c.update_threads):
+            t2 = time.perf_counter()
+            stats.update(self.update())
+            t3 = time.perf_counter()
+        self.iteration += 1
+        self.env_steps += samples
+        stats["explained_variance"] = explained
+        stats["action_std"] = float(self.actor.std().mean())
+        stats["collect_steps_per_s"] = samples / max(t1 - t0, 1e-9)
+        stats["update_samples_per_s"] = samples / max(t3 - t2, 1e-9)
+        stats["collect_seconds"] = t1 - t0
+        stats["update_seconds"] = t3 - t2
+        if self.finished_returns:
+            stats["episode_return"] = sum(self.finished_returns) / len(self.finished_returns)
+            stats["episode_length"] = sum(self.finished_lengths) / len(self.finished_lengths)
+        return stats
+
+    # ------------------------------------------------------------------ checkpoints
+
+    def state_dict(self) -> dict[str, Any]:
+        """Everything a bit-exact resume needs (the env's own state is saved by its owner)."""
+        return {
+            "actor": self.actor.state_dict(),
+            "critic": self.critic.state_dict(),
+            "obs_norm": self.obs_norm.state_dict(),
+            "value_norm": self.value_norm.state_dict(),
+            "optimizer": self.optimizer.state_dict(),
+            "generator": self.generator.get_state(),
+            "last_obs": None
+            if self.last_obs is None
+            else {k: v.clone() for k, v in self.last_obs.items()},
+            "episode_return": self.episode_return.clone(),
+            "episode_length": self.episode_length.clone(),
+            "finished_returns": list(self.finished_returns),
+            "finished_lengths": list(self.finished_lengths),
+            "iteration": self.iteration,
+            "env_steps": self.env_steps,
+        }
+
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        self.actor.load_state_dict(state["actor"])
+        self.critic.load_state_dict(state["critic"])
+        self.obs_norm.load_state_dict(state["obs_norm"])
+        self.value_norm.load_state_dict(state["value_norm"])
+        self.optimizer.load_state_dict(state["optimizer"])
+        self.generator.set_state(state["generator"])
+        last = state["last_obs"]
+        self.last_obs = None if last is None else {k: v.clone() for k, v in last.items()}
+        if state["episode_return"].shape[0] == self.num_envs:
+            self.episode_return = state["episode_return"].clone()
+            self.episode_length = state["episode_length"].clone()
+        else:  # evaluation with another env count: only the policy matters
+            self.last_obs = None
+        self.finished_returns.clear()
+        self.finished_returns.extend(state["finished_returns"])
+        self.finished_lengths.clear()
+        self.finished_lengths.extend(state["finished_lengths"])
+        self.iteration = int(state["iteration"])
+        self.env_steps = int(state["env_steps"])

@@ -1,0 +1,58 @@
+"""PPO as an algorithm plugin (defaults: paper Table 3; env count measured on this machine)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import torch
+
+import retarget
+from retarget import Algorithm, VecEnv
+from retarget.learn import PPOConfig, PPOLearner
+
+
+class PPO(Algorithm):
+    """Proximal policy optimisation with an asymmetric critic and fixed exploration noise.
+
+    The actor reads the ``actor`` observation group, the critic the privileged ``critic``
+    group; observations and values are normalised with running statistics; time-outs are
+    bootstrapped from ``info["final_obs"]``, failures are not. ``num_envs`` is the number of
+    environments this machine trains best with (the env builder reads it when no other count
+    is given); ``rollout_steps`` x ``num_envs`` samples make one iteration.
+    """
+
+    name = "ppo"
+    Config = PPOConfig
+
+    def __init__(self, config: PPOConfig | None = None) -> None:
+        super().__init__(config)
+        self.learner: PPOLearner | None = None
+
+    def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
+        assert isinstance(self.config, PPOConfig)
+        self.learner = PPOLearner(
+            self.config, env.obs_dims, env.action_dim, env.num_envs, generator
+        )
+
+    def _ready(self) -> PPOLearner:
+        if self.learner is None:
+            raise RuntimeError("PPO.setup(env) must be called first")
+        return self.learner
+
+    def train_iteration(self, env: VecEnv) -> dict[str, float]:
+        return self._ready().train_iteration(env)
+
+    def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
+        return self._ready().act(obs)
+
+    def state_dict(self) -> dict[str, Any]:
+        return self._ready().state_dict()
+
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        self._ready().load_state_dict(state)
+
+
+@retarget.hookimpl
+def register_algorithms(register) -> None:
+    register(PPO)
