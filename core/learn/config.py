@@ -1,6 +1,6 @@
 """PPO settings: the paper's Table 3 values, plus what this project had to decide itself.
 
-Decisions (measured figures in ``docs/learning.md``):
+Decisions (figures from ``benchmarks/bench_ppo_update.py`` on a 2-core machine):
 
 * **Exploration noise 0.02 is read as the variance** of the fixed Gaussian, i.e. a standard
   deviation of sqrt(0.02) = 0.141 on actions in [-1, 1]. Read as a standard deviation it would
@@ -31,9 +31,9 @@ from retarget.kinds import PluginConfig
 
 
 class PPOConfig(PluginConfig):
-    """PPO hyper-parameters (defaults: paper Table 3, environment count for this machine)."""
+    """PPO hyper-parameters (defaults: paper Table 3; the environment count is the recipe's
+    ``env.num_envs``, one source of truth for every algorithm)."""
 
-    num_envs: int = Field(256, gt=0, description="environments stepped together (measured)")
     rollout_steps: int = Field(32, gt=0, description="steps per env per iteration (measured)")
     learning_rate: float = Field(1.2e-4, gt=0)
     gamma: float = Field(0.97, ge=0, lt=1)

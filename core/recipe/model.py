@@ -58,7 +58,7 @@ class SimSection(Strict):
 class EnvSection(Strict):
     """The tracking environment's own settings (plugins configure the rest)."""
 
-    num_envs: int = Field(64, ge=1, description="environments stepped together")
+    num_envs: int = Field(256, ge=1, description="environments stepped together")
     privileged_offsets: list[int] = Field(
         default_factory=lambda: [1, 3, 6],
         description="future reference frames the critic sees (asymmetric critic)",

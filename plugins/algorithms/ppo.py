@@ -17,9 +17,8 @@ class PPO(Algorithm):
 
     The actor reads the ``actor`` observation group, the critic the privileged ``critic``
     group; observations and values are normalised with running statistics; time-outs are
-    bootstrapped from ``info["final_obs"]``, failures are not. ``num_envs`` is the number of
-    environments this machine trains best with (the env builder reads it when no other count
-    is given); ``rollout_steps`` x ``num_envs`` samples make one iteration.
+    bootstrapped from ``info["final_obs"]``, failures are not. ``rollout_steps`` x the
+    recipe's ``env.num_envs`` samples make one iteration.
     """
 
     name = "ppo"

@@ -13,7 +13,6 @@ from retarget.loader import load_plugins
 from retarget.testing.fakes import FakeVecEnv
 
 TINY = dict(
-    num_envs=8,
     rollout_steps=16,
     actor_hidden=(32, 32),
     critic_hidden=(32, 32),
@@ -23,9 +22,11 @@ TINY = dict(
 TIMING = {"collect_steps_per_s", "update_samples_per_s", "collect_seconds", "update_seconds"}
 
 
-def learner(seed: int = 0, env: FakeVecEnv | None = None, **overrides) -> PPOLearner:
+def learner(
+    seed: int = 0, env: FakeVecEnv | None = None, num_envs: int = 8, **overrides
+) -> PPOLearner:
     cfg = PPOConfig(**{**TINY, **overrides})
-    env = env or FakeVecEnv(num_envs=cfg.num_envs)
+    env = env or FakeVecEnv(num_envs=num_envs)
     return PPOLearner(
         cfg, env.obs_dims, env.action_dim, env.num_envs, torch.Generator().manual_seed(seed)
     )
