@@ -15,7 +15,7 @@ import warnings
 from collections.abc import Sequence
 
 import retarget
-from retarget.cli import eval_cmd, play_cmd, plugins_cmd, recipe_cmd, train_cmd
+from retarget.cli import eval_cmd, export_cmd, play_cmd, plugins_cmd, recipe_cmd, train_cmd
 from retarget.cli.console import error, warning
 from retarget.errors import RetargetError
 from retarget.kinds import Command
@@ -43,6 +43,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     train_cmd.add_parser(sub)
     eval_cmd.add_parser(sub)
     play_cmd.add_parser(sub)
+    export_cmd.add_parser(sub)
     for name in registry.names("command"):
         entry = registry.get("command", name)
         _add_plugin_command(sub, entry.cls, entry.plugin)

@@ -135,6 +135,10 @@ class RetargetEnv:
             sources[plugin.name] = (plugin.observe, plugin.spec(layout).size)
         return sources
 
+    def observation_size(self, source: str) -> int:
+        """Width of one observation source (``proprio``, a sensor's or observer's name)."""
+        return int(self._sources[source][1])
+
     def _default_groups(self) -> dict[str, list[str]]:
         actor = [s.name for s in self.sensors] + ["proprio"] + [o.name for o in self.observers]
         return {"actor": actor, "critic": [*actor, "privileged"]}

@@ -55,3 +55,10 @@ class Algorithm(Plugin):
 
     @abstractmethod
     def load_state_dict(self, state: Mapping[str, Any]) -> None: ...
+
+    def policy(self) -> tuple[str, torch.nn.Module]:
+        """The deployable policy: ``(group, module)`` where ``module`` maps that observation
+        group's raw ``(B, D)`` float32 tensor to actions ``(B, A)`` in [-1, 1], normalisation
+        included. ``retarget export`` turns it into ONNX; an algorithm that cannot be exported
+        keeps this default."""
+        raise NotImplementedError(f"algorithm '{self.name}' does not provide an exportable policy")

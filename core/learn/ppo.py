@@ -17,6 +17,7 @@ the episode (as in ``FakeVecEnv``).
 
 from __future__ import annotations
 
+import copy
 import time
 from collections import deque
 from collections.abc import Mapping
@@ -44,6 +45,29 @@ def torch_threads(count: int):
     finally:
         if torch.get_num_threads() != previous:
             torch.set_num_threads(previous)
+
+
+class DeployedPolicy(nn.Module):
+    """Raw actor observations -> actions in [-1, 1]: what a headset application runs."""
+
+    def __init__(self, normalizer: RunningNormalizer | None, net: nn.Module) -> None:
+        super().__init__()
+        self.net = copy.deepcopy(net)
+        self.normalize = normalizer is not None
+        self.clip = float(normalizer.clip) if normalizer is not None else 0.0
+        # float32 constants computed as RunningNormalizer.forward does: same arithmetic as act()
+        mean = normalizer.mean.float() if normalizer is not None else None
+        scale = (
+            (normalizer.var + normalizer.eps).rsqrt().float() if normalizer is not None else None
+        )
+        self.register_buffer("mean", mean)
+        self.register_buffer("scale", scale)
+
+    def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        x = obs
+        if self.normalize:
+            x = ((x - self.mean) * self.scale).clamp(-self.clip, self.clip)
+        return self.net(x).clamp(-1.0, 1.0)
 
 
 class PPOLearner:
@@ -115,6 +139,11 @@ class PPOLearner:
         """The deterministic policy (the Gaussian's mean) in [-1, 1]."""
         x = self._normalize(self.actor_key, obs[self.actor_key].float())
         return self.actor(x).clamp(-1.0, 1.0)
+
+    def deployable_policy(self) -> nn.Module:
+        """A frozen copy of :meth:`act` as one module (normaliser + mean network + clamp)."""
+        norm = self.obs_norm.groups[self.actor_key] if self.config.normalize_obs else None
+        return DeployedPolicy(norm, self.actor.net).eval()
 
     # ------------------------------------------------------------------ collection
 

@@ -45,6 +45,10 @@ class PPO(Algorithm):
     def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
         return self._ready().act(obs)
 
+    def policy(self) -> tuple[str, torch.nn.Module]:
+        learner = self._ready()
+        return learner.actor_key, learner.deployable_policy()
+
     def state_dict(self) -> dict[str, Any]:
         return self._ready().state_dict()
 

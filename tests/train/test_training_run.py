@@ -179,3 +179,42 @@ def test_ctrl_c_leaves_a_loadable_checkpoint_that_resumes(recipe: Path, tmp_path
     )  # fmt: skip
     assert resumed.returncode == 0, resumed.stdout + resumed.stderr
     assert load_checkpoint(latest_checkpoint(run))["progress"]["iteration"] == done + 1
+
+
+def test_export_onnx_matches_torch(recipe: Path, tmp_path: Path) -> None:
+    ort = pytest.importorskip("onnxruntime")
+    import json
+
+    import numpy as np
+
+    from retarget.train.load import load_run
+
+    assert main(["train", str(recipe), "--steps", str(2 * SAMPLES), "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    run = tmp_path / "tiny" / "latest"
+    assert main(["export", str(run), "--onnx"]) == 0
+    onnx_path = run / "export" / "policy.onnx"
+    meta = json.loads(onnx_path.with_suffix(".json").read_text())
+    loaded = load_run(run, load_plugins(), num_envs=4)
+    assert meta["obs_dim"] == loaded.env.obs_dims["actor"]
+    assert meta["action_dim"] == loaded.env.action_dim == len(meta["torque_limits"])
+    assert sum(s["size"] for s in meta["observation_sources"]) == meta["obs_dim"]
+
+    # real observations of the env (plus far-out ones that hit the normaliser's clip)
+    obs = loaded.env.reset()["actor"].float()
+    g = torch.Generator().manual_seed(0)
+    wild = obs + 50.0 * torch.randn(obs.shape, generator=g)
+    batch = torch.cat([obs, wild])
+    expected = loaded.algorithm.act({"actor": batch}).numpy()
+    session = ort.InferenceSession(str(onnx_path))
+    (got,) = session.run(None, {"obs": batch.numpy()})
+    assert got.shape == expected.shape
+    np.testing.assert_allclose(got, expected, atol=1e-5, rtol=0)
+    assert np.abs(expected).max() > 1e-3  # a policy that outputs something
+
+
+def test_export_needs_a_format(recipe: Path, tmp_path: Path, capsys) -> None:
+    assert main(["train", str(recipe), "--steps", str(SAMPLES), "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    assert main(["export", str(tmp_path / "tiny" / "latest")]) == 2
+    assert "--onnx" in capsys.readouterr().err

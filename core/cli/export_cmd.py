@@ -1,0 +1,56 @@
+"""``retarget export RUN --onnx``: the trained actor (with its normaliser) as ONNX + JSON."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from retarget.cli.console import out
+from retarget.deploy import export_onnx
+from retarget.errors import RetargetError
+from retarget.registry import Registry
+from retarget.train.load import load_run
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    parser = sub.add_parser("export", help="export a trained policy (ONNX)")
+    parser.add_argument("run", help="run directory (runs/NAME/latest)")
+    parser.add_argument("--onnx", action="store_true", help="write ONNX (the only format yet)")
+    parser.add_argument("--out", help="output .onnx file (default: RUN/export/policy.onnx)")
+    parser.add_argument("--checkpoint", help="a specific checkpoint file (default: latest)")
+    parser.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace, registry: Registry) -> int:
+    if not args.onnx:
+        raise RetargetError("choose a format", hint="retarget export RUN --onnx")
+    loaded = load_run(args.run, registry, num_envs=1, checkpoint=args.checkpoint)
+    env = loaded.env
+    group, _ = _policy_group(loaded.algorithm)
+    layout = env.layout
+    metadata = {
+        "run": str(loaded.run),
+        "checkpoint": str(loaded.checkpoint),
+        "character": env.character.name,
+        "control_hz": env.options.sim.control_hz,
+        "obs_dim": env.obs_dims[group],
+        "observation_sources": [
+            {"name": name, "size": env.observation_size(name)} for name in env.groups[group]
+        ],
+        "actuators": list(layout.actuator_names),
+        "torque_limits": [float(t) for t in layout.torque_limits],
+    }
+    path = Path(args.out) if args.out else loaded.run / "export" / "policy.onnx"
+    exported = export_onnx(loaded.algorithm, path, metadata)
+    out.print(
+        f"wrote {exported.onnx} (obs {exported.obs_dim} -> action {exported.action_dim}) "
+        f"and {exported.metadata}"
+    )
+    return 0
+
+
+def _policy_group(algorithm):
+    try:
+        return algorithm.policy()
+    except NotImplementedError as exc:
+        raise RetargetError(str(exc), plugin=algorithm.name) from None

@@ -1,0 +1,5 @@
+"""Deploying trained policies outside Python training code (ONNX export)."""
+
+from retarget.deploy.onnx_export import ExportedPolicy, export_onnx
+
+__all__ = ["ExportedPolicy", "export_onnx"]
