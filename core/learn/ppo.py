@@ -159,6 +159,8 @@ class PPOLearner:
         finished_returns: list[torch.Tensor] = []
         finished_lengths: list[torch.Tensor] = []
         std = self.actor.std()
+        term_sums: dict[str, float] = {}  # per reward term: episode sums x finished episodes
+        term_count = 0.0
         # raw observation statistics of this rollout, merged into the normaliser at its end
         pending = GroupNormalizer({k: v.shape[-1] for k, v in st.obs.items()})
         for _ in range(c.rollout_steps):
@@ -193,6 +195,12 @@ class PPOLearner:
             self.episode_return += reward
             self.episode_length += 1
             done = terminated | truncated
+            episode = info.get("episode")
+            if episode is not None and "terms" in episode:
+                weight = float(episode["length"].numel())
+                for name, value in episode["terms"].items():
+                    term_sums[name] = term_sums.get(name, 0.0) + float(value) * weight
+                term_count += weight
             if done.any():
                 finished_returns.append(self.episode_return[done].clone())
                 finished_lengths.append(self.episode_length[done].clone())
@@ -210,10 +218,13 @@ class PPOLearner:
         if finished_returns:
             self.finished_returns.extend(torch.cat(finished_returns).tolist())
             self.finished_lengths.extend(torch.cat(finished_lengths).float().tolist())
-        return {
+        stats = {
             "mean_reward": float(st.rewards.mean()),
             "episodes_finished": float(sum(len(r) for r in finished_returns)),
         }
+        if term_count:  # mean episode sum of each reward term (the env's info["episode"])
+            stats.update({f"episode_{k}": v / term_count for k, v in term_sums.items()})
+        return stats
 
     @torch.no_grad()
     def _update_value_stats(self, returns: torch.Tensor) -> None:

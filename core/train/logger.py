@@ -48,6 +48,14 @@ class MetricsLogger:
                 if key != "step" and math.isfinite(value):
                     self.writer.add_scalar(key, value, step)
 
+    def drop_after(self, iteration: int) -> None:
+        """Forget rows of iterations after ``iteration``: a run killed between checkpoints
+        logged iterations that its resume will redo, and each should appear once."""
+        kept = [r for r in self.rows if r.get("iteration", 0.0) <= iteration]
+        if len(kept) != len(self.rows):
+            self.rows = kept
+            self._rewrite()
+
     def _rewrite(self) -> None:
         tmp = self.csv_path.with_suffix(".csv.tmp")
         with tmp.open("w", newline="") as handle:

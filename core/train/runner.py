@@ -115,11 +115,19 @@ class Trainer:
         self.algorithm.load_state_dict(state["algorithm"])
         self.env.load_state_dict(state["env"])
         self.progress = Progress(**state["progress"])
+        self.logger.drop_after(self.progress.iteration)
         torch.set_rng_state(state["rng"]["torch"])
         np.random.set_state(state["rng"]["numpy"])
         random.setstate(state["rng"]["python"])
 
     # ------------------------------------------------------------------ loop
+
+    def _termination_shares(self, before: dict[str, int]) -> dict[str, float]:
+        """Which termination ended the episodes of the last iteration (share of each)."""
+        after = self.env.termination_counts
+        delta = {name: after[name] - before.get(name, 0) for name in after}
+        total = sum(delta.values())
+        return {f"end_{k}": v / total for k, v in delta.items()} if total else {}
 
     def _request_stop(self, signum: int, frame: FrameType | None) -> None:
         self._stop_requests += 1
@@ -138,7 +146,9 @@ class Trainer:
             start = time.perf_counter() - self.progress.elapsed
             while not budget.done(self.progress.env_steps, self.progress.elapsed):
                 before = self.env.total_steps
+                ends_before = self.env.termination_counts
                 stats = self.algorithm.train_iteration(self.env)
+                stats.update(self._termination_shares(ends_before))
                 p = self.progress
                 p.iteration += 1
                 p.env_steps += self.env.total_steps - before

@@ -189,6 +189,12 @@ def test_plugin_is_registered_with_defaults() -> None:
     algo = entry.cls()
     env = FakeVecEnv(num_envs=4)
     algo.setup(env, torch.Generator().manual_seed(0))
-    assert algo.config.num_envs > 0
+    # paper Table 3 defaults
+    cfg = algo.config
+    table3 = (1.2e-4, 0.97, 0.95, 0.2, 5)
+    assert (cfg.learning_rate, cfg.gamma, cfg.lam, cfg.clip, cfg.epochs) == table3
+    assert cfg.actor_hidden == (300, 200, 100) and cfg.critic_hidden == (400, 400, 300, 200)
+    assert cfg.activation == "tanh"
+    assert algo.act(env.reset()).shape == (4, env.action_dim)
     with pytest.raises(Exception, match="extra"):
         entry.cls.Config(no_such_field=1)

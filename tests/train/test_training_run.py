@@ -218,3 +218,26 @@ def test_export_needs_a_format(recipe: Path, tmp_path: Path, capsys) -> None:
                  "--no-tensorboard"]) == 0  # fmt: skip
     assert main(["export", str(tmp_path / "tiny" / "latest")]) == 2
     assert "--onnx" in capsys.readouterr().err
+
+
+def test_logs_reward_terms_terminations_and_resume_drops_redone_rows(
+    recipe: Path, tmp_path: Path
+) -> None:
+    first = trainer(recipe, tmp_path, "logs")
+    first.train(Budget(steps=6 * SAMPLES))
+    table = rows(first.run)
+    columns = set(table[0]) | set(table[-1])
+    assert {"episode_joint_pos", "episode_link_pos", "episode_action_diff"} <= columns
+    shares = [k for k in columns if k.startswith("end_")]
+    assert {"end_fall", "end_episode_cap"} <= set(shares)
+    for row in table:
+        values = [float(row[k]) for k in shares if row.get(k)]
+        if values:
+            assert abs(sum(values) - 1.0) < 1e-6
+
+    # resuming from iteration 2 (written by checkpoint_every=2) redoes 3..6: once each in the CSV
+    again = Trainer(first.resolved, first.run, checkpoint_every=2, tensorboard=False)
+    again.restore(first.run / "checkpoints" / "ckpt-0000002.pt")
+    assert [float(r["iteration"]) for r in rows(first.run)] == [1.0, 2.0]
+    again.train(Budget(steps=4 * SAMPLES))
+    assert [float(r["iteration"]) for r in rows(first.run)] == [1.0, 2.0, 3.0, 4.0]
