@@ -28,11 +28,13 @@ def render_rollout(
     width: int = 480,
     height: int = 360,
     ghost_offset: float = 0.0,
+    ghost: bool = True,
 ) -> list[np.ndarray]:
     """Run ``policy`` in environment 0 from ``(clip, start)`` and render every control step.
 
     The ghost is the human reference motion (shifted sideways by ``ghost_offset`` metres,
-    overlaid when 0); yellow boxes are the headset and controllers the policy was given.
+    overlaid when 0; ``ghost=False`` hides it, e.g. when the devices come from a recording);
+    yellow boxes are the headset and controllers the policy was given.
     """
     model = env.world.model
     data = mujoco.MjData(model)
@@ -55,7 +57,7 @@ def render_rollout(
             render.renderer.update_scene(data, camera=cam)
             scene = render.renderer.scene
             human = lib.global_pos[row].numpy() + shift
-            for j in range(1, sk.NUM_JOINTS):
+            for j in range(1, sk.NUM_JOINTS if ghost else 1):
                 a, b = human[sk.PARENTS[j]], human[j]
                 add_decor_geom(mujoco, scene, mujoco.mjtGeom.mjGEOM_CAPSULE, [0.025], a, GHOST, b)
             for d in lib.devices[row].numpy():

@@ -6,13 +6,18 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+import torch
 
 from retarget.character_view import label, save_video
 from retarget.cli.console import out
 from retarget.errors import RetargetError
+from retarget.motion.device_recording import DeviceRecording, read_recording
+from retarget.motion.device_stream import align_to, resample_stream
+from retarget.motion.procedural import idle_clip
 from retarget.play import render_rollout
 from retarget.registry import Registry
-from retarget.train.load import load_run
+from retarget.train.load import load_run, locked_recipe
+from retarget.train.run_dir import resolve_run
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -25,7 +30,29 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--start", type=float, default=0.0, help="start time in the clip, s")
     parser.add_argument("--size", default="480x360", help="WIDTHxHEIGHT of each view")
     parser.add_argument("--ghost-offset", type=float, default=0.0, help="ghost shift, m")
+    parser.add_argument(
+        "--input",
+        metavar="RECORDING",
+        help="drive the policy from a recorded device stream (.jsonl) instead of --motions",
+    )
     parser.set_defaults(handler=run)
+
+
+def _driven_by(rec: DeviceRecording, path: str, registry: Registry, args: argparse.Namespace):
+    """A run whose env's only clip carries the recording's devices (at the control rate,
+    calibrated to the character's start) over a standing idle body (start pose only)."""
+    hz = locked_recipe(resolve_run(path), registry)[0].recipe.sim.control_hz
+    stream = resample_stream(rec, hz)
+    seconds = len(stream) / hz + 1.0
+    loaded = load_run(path, registry, num_envs=1, clips=[idle_clip(seconds)])
+    lib = loaded.env.library
+    rows = int(lib.start[0]) + torch.arange(len(stream))
+    start_hmd = lib.devices[int(lib.start[0]), 0].double().numpy()
+    lib.devices[rows] = torch.as_tensor(align_to(stream, start_hmd), dtype=lib.devices.dtype)
+    last = int(lib.start[0]) + len(stream) - 1
+    lib.devices[last + 1 : int(lib.start[0]) + int(lib.length[0])] = lib.devices[last]
+    args.seconds = min(args.seconds, (len(stream) - 1) / hz)
+    return loaded, f"recording {Path(args.input).name}"
 
 
 def run(args: argparse.Namespace, registry: Registry) -> int:
@@ -33,9 +60,15 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         width, height = (int(v) for v in args.size.lower().split("x"))
     except ValueError:
         raise RetargetError(f"--size expects WIDTHxHEIGHT, got '{args.size}'") from None
+    if args.input and args.motions:
+        raise RetargetError("give --input RECORDING or --motions CLIP, not both")
+    stream = read_recording(args.input) if args.input else None
     views = []
     for path in args.runs:
-        loaded = load_run(path, registry, num_envs=1, motions=args.motions)
+        if stream is not None:
+            loaded, clip_name = _driven_by(stream, path, registry, args)
+        else:
+            loaded = load_run(path, registry, num_envs=1, motions=args.motions)
         env = loaded.env
         if not 0 <= args.clip < env.library.num_clips:
             raise RetargetError(f"--clip {args.clip}: the motions hold {env.library.num_clips}")
@@ -49,8 +82,10 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             width=width,
             height=height,
             ghost_offset=args.ghost_offset,
+            ghost=stream is None,
         )
-        name = f"{env.character.name}: {env.library.names[args.clip]}"
+        clip = clip_name if stream is not None else env.library.names[args.clip]
+        name = f"{env.character.name}: {clip}"
         views.append([label(f, [(0.5, 0.06, name)]) for f in frames])
     count = min(len(v) for v in views)
     frames = [np.concatenate([v[i] for v in views], axis=1) for i in range(count)]

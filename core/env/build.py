@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from retarget.env.env import EnvOptions, RetargetEnv
 from retarget.kinds import Character, Observer, RewardTerm, Scene, Sensor, Termination
+from retarget.motion.clip import MotionClip
 from retarget.motion.sources import load_motions
 from retarget.recipe import ResolvedRecipe
 from retarget.sim import SimSettings
@@ -15,11 +16,13 @@ def env_from_recipe(
     num_envs: int | None = None,
     threads: int | None = None,
     motions: str | None = None,
+    clips: list[MotionClip] | None = None,
     terminations: bool = True,
 ) -> RetargetEnv:
     """Instantiate every component of ``resolved``, load its motions and build the env.
 
-    ``motions`` replaces the recipe's motion path (evaluation on other clips);
+    ``motions`` replaces the recipe's motion path (evaluation on other clips), ``clips``
+    gives the clips themselves (already loaded or generated);
     ``terminations=False`` keeps only clip ends (evaluation follows runs through failures).
     """
     recipe = resolved.recipe
@@ -53,7 +56,8 @@ def env_from_recipe(
         reset_lift=recipe.env.reset_lift,
         groups=recipe.env.groups,
     )
-    clips = load_motions(motions if motions is not None else recipe.motions.path)
+    if clips is None:
+        clips = load_motions(motions if motions is not None else recipe.motions.path)
     sensors: list[Sensor] = made("sensor")
     observers: list[Observer] = made("observer")
     scene: Scene | None = scenes[0] if scenes else None

@@ -305,6 +305,14 @@ GENERATORS: dict[str, Callable[[_Body, float], MotionClip]] = {
 }
 
 
+def idle_clip(
+    seconds: float, height: float = sk.REFERENCE_HEIGHT, fps: float = GEN_FPS
+) -> MotionClip:
+    """A standing idle of ``seconds``: the start pose and placeholder body motion when a
+    policy is driven by recorded devices instead of motion capture."""
+    return _idle(_Body(height), fps, seconds)
+
+
 def default_motions(
     height: float = sk.REFERENCE_HEIGHT, fps: float = GEN_FPS, names: tuple[str, ...] | None = None
 ) -> list[MotionClip]:

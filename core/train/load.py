@@ -12,6 +12,7 @@ from retarget.env import RetargetEnv
 from retarget.env.build import env_from_recipe
 from retarget.errors import RecipeError
 from retarget.kinds import Algorithm
+from retarget.motion.clip import MotionClip
 from retarget.recipe import ResolvedRecipe, parse_text, resolve
 from retarget.registry import Registry
 from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
@@ -42,6 +43,7 @@ def load_run(
     *,
     num_envs: int = 1,
     motions: str | None = None,
+    clips: list[MotionClip] | None = None,
     terminations: bool = False,
     checkpoint: str | Path | None = None,
 ) -> LoadedRun:
@@ -52,7 +54,9 @@ def load_run(
         raise RecipeError("the run's recipe has no algorithm", file=str(run / LOCK))
     ckpt = Path(checkpoint) if checkpoint is not None else latest_checkpoint(run)
     state = load_checkpoint(ckpt)
-    env = env_from_recipe(resolved, num_envs=num_envs, motions=motions, terminations=terminations)
+    env = env_from_recipe(
+        resolved, num_envs=num_envs, motions=motions, clips=clips, terminations=terminations
+    )
     algorithm = resolved.component("algorithm").instantiate()
     assert isinstance(algorithm, Algorithm)
     algorithm.setup(env)

@@ -12,6 +12,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 
@@ -241,3 +242,28 @@ def test_logs_reward_terms_terminations_and_resume_drops_redone_rows(
     assert [float(r["iteration"]) for r in rows(first.run)] == [1.0, 2.0]
     again.train(Budget(steps=4 * SAMPLES))
     assert [float(r["iteration"]) for r in rows(first.run)] == [1.0, 2.0, 3.0, 4.0]
+
+
+def test_play_from_a_recorded_device_stream(recipe: Path, tmp_path: Path) -> None:
+    from retarget.motion.device_recording import DeviceRecording, write_recording
+    from retarget.motion.devices import device_poses
+    from retarget.motion.procedural import default_motions
+
+    assert main(["train", str(recipe), "--steps", str(SAMPLES), "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    walk = next(c for c in default_motions() if c.name.startswith("walk"))
+    poses = device_poses(walk.global_pos, walk.global_rot, walk.height)[:40]
+    times = 100.0 + np.arange(len(poses)) / walk.fps  # a headset clock, not starting at 0
+    tracked = np.ones(poses.shape[:2], bool)
+    tracked[5:9, 1] = False
+    path = write_recording(
+        tmp_path / "rec.jsonl", DeviceRecording(times, poses, tracked), convention="openxr"
+    )
+    video = tmp_path / "rec.gif"
+    rc = main(["play", str(tmp_path / "tiny" / "latest"), "--input", str(path),
+               "--out", str(video), "--size", "96x72"])  # fmt: skip
+    assert rc == 0
+    assert video.stat().st_size > 1000
+    # --input and --motions together is a user error
+    assert main(["play", str(tmp_path / "tiny" / "latest"), "--input", str(path),
+                 "--motions", str(path), "--out", str(video)]) == 2  # fmt: skip

@@ -1,0 +1,57 @@
+"""Driving a policy from a recorded device stream instead of motion capture.
+
+A recording (:mod:`retarget.motion.device_recording`) has its own clock and its own room
+origin. To drive an environment it is resampled to the control rate (positions linearly,
+rotations by slerp; untracked samples hold the last tracked pose, as a headset runtime does)
+and calibrated like a VR application calibrates its avatar: translated and turned about the
+vertical so that the first headset pose stands where the character starts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from retarget.motion import rotations as rot
+from retarget.motion.device_recording import DeviceRecording
+
+
+def hold_untracked(rec: DeviceRecording) -> np.ndarray:
+    """Poses ``(T, 3, 7)`` where untracked samples repeat the device's previous tracked pose
+    (before the first tracked one: its first tracked pose)."""
+    poses = rec.poses.copy()
+    for d in range(poses.shape[1]):
+        tracked = np.flatnonzero(rec.tracked[:, d])
+        if tracked.size == 0:
+            continue
+        idx = np.maximum.accumulate(np.where(rec.tracked[:, d], np.arange(len(poses)), -1))
+        idx = np.where(idx < 0, tracked[0], idx)
+        poses[:, d] = rec.poses[idx, d]
+    return poses
+
+
+def resample_stream(rec: DeviceRecording, hz: float) -> np.ndarray:
+    """The stream at ``hz`` from its first to its last sample: ``(F, 3, 7)``."""
+    poses = hold_untracked(rec)
+    t = rec.time - rec.time[0]
+    frames = int(np.floor(t[-1] * hz + 1e-9)) + 1
+    query = np.arange(frames) / hz
+    k = np.clip(np.searchsorted(t, query, side="right") - 1, 0, len(t) - 1)
+    k1 = np.minimum(k + 1, len(t) - 1)
+    span = np.where(k1 > k, t[k1] - t[k], 1.0)
+    w = np.clip((query - t[k]) / span, 0.0, 1.0)[:, None, None]
+    pos = poses[k, :, :3] * (1 - w) + poses[k1, :, :3] * w
+    quat = rot.slerp(poses[k, :, 3:], poses[k1, :, 3:], w)
+    return np.concatenate([pos, quat], axis=-1)
+
+
+def align_to(poses: np.ndarray, hmd: np.ndarray) -> np.ndarray:
+    """Move the stream rigidly (vertical-axis rotation + horizontal translation) so that its
+    first headset pose has the horizontal position and heading of ``hmd`` (7,). Heights are
+    kept: they are the user's real heights above the floor."""
+    yaw = float(rot.yaw(hmd[3:]) - rot.yaw(poses[0, 0, 3:]))
+    turn = rot.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.array(yaw))
+    origin = poses[0, 0, :3] * np.array([1.0, 1.0, 0.0])
+    pos = rot.apply(np.broadcast_to(turn, (*poses.shape[:-1], 4)), poses[..., :3] - origin)
+    pos[..., :2] += hmd[:2]
+    quat = rot.mul(np.broadcast_to(turn, poses[..., 3:].shape), poses[..., 3:])
+    return np.concatenate([pos, rot.normalize(quat)], axis=-1)
