@@ -155,7 +155,9 @@ class Trainer:
                 p.elapsed = time.perf_counter() - start
                 p.last = {k: float(v) for k, v in stats.items()}
                 p.last["steps_per_s_total"] = p.env_steps / max(p.elapsed, 1e-9)
-                self.logger.log(p.env_steps, {"iteration": p.iteration, **p.last})
+                self.logger.log(
+                    p.env_steps, {"iteration": p.iteration, "elapsed_s": p.elapsed, **p.last}
+                )
                 if on_iteration is not None:
                     on_iteration(p)
                 if self._stop_requests:
