@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import torch
 
-from retarget.heading import quat_to_6d, to_heading_points, to_heading_quats, to_heading_vectors
+from retarget.heading import heading_cos_sin, quat_to_6d, unyaw
 from retarget.state import Layout, StepContext
 
 FUTURE_POS = "future_body_pos"
@@ -24,28 +24,34 @@ def proprio_size(layout: Layout) -> int:
 
 def proprio(ctx: StepContext) -> torch.Tensor:
     """Root height, root tilt (6D), root velocities, joint angles/velocities, and every body's
-    position, orientation (6D) and velocities relative to the root, in the heading frame."""
+    position, orientation (6D) and velocities relative to the root, in the heading frame.
+
+    The heading's cosine/sine are computed once and applied with :func:`unyaw` to positions,
+    velocities and the two columns of each 6D rotation alike (rotating a rotation's columns is
+    rotating the rotation): this runs every control step for every env.
+    """
     s = ctx.sim
     root_pos, root_quat = s.qpos[:, :3], s.qpos[:, 3:7]
-    n = ctx.num_envs
-    tilt = quat_to_6d(to_heading_quats(root_quat[:, None], root_quat))[:, 0]
+    n, b = ctx.num_envs, s.body_pos.shape[1]
+    c, sn = heading_cos_sin(root_quat)
+    rot6 = quat_to_6d(torch.cat([root_quat[:, None], s.body_quat], dim=1))
+    rot6 = unyaw(rot6.reshape(n, b + 1, 2, 3), c, sn).reshape(n, b + 1, 6)
     # free joint: linear velocity in the world frame, angular velocity in the body frame
-    root_vel = torch.cat(
-        [to_heading_vectors(s.qvel[:, None, :3], root_quat), s.qvel[:, None, 3:6]], 1
+    vectors = torch.cat(
+        [s.qvel[:, None, :3], s.body_pos - root_pos[:, None], s.body_linvel, s.body_angvel], 1
     )
-    body_pos = to_heading_points(s.body_pos, root_pos, root_quat, keep_height=False)
-    body_rot = quat_to_6d(to_heading_quats(s.body_quat, root_quat))
-    body_vel = to_heading_vectors(torch.cat([s.body_linvel, s.body_angvel], dim=1), root_quat)
+    vectors = unyaw(vectors, c, sn)
     return torch.cat(
         [
             root_pos[:, 2:3],
-            tilt,
-            root_vel.reshape(n, -1),
+            rot6[:, 0],
+            vectors[:, 0],
+            s.qvel[:, 3:6],
             s.qpos[:, 7:],
             s.qvel[:, 6:],
-            body_pos.reshape(n, -1),
-            body_rot.reshape(n, -1),
-            body_vel.reshape(n, -1),
+            vectors[:, 1 : 1 + b].reshape(n, -1),
+            rot6[:, 1:].reshape(n, -1),
+            vectors[:, 1 + b :].reshape(n, -1),
         ],
         dim=-1,
     ).float()
@@ -61,8 +67,9 @@ def privileged(ctx: StepContext) -> torch.Tensor:
     s, ref = ctx.sim, ctx.ref.pose
     root_pos, root_quat = s.qpos[:, :3], s.qpos[:, 3:7]
     n = ctx.num_envs
-    root_offset = to_heading_vectors((ref.qpos[:, :3] - root_pos)[:, None], root_quat)[:, 0]
-    future = to_heading_points(ctx.ref.extras[FUTURE_POS], root_pos, root_quat, keep_height=False)
+    c, sn = heading_cos_sin(root_quat)
+    root_offset = unyaw((ref.qpos[:, :3] - root_pos)[:, None], c, sn)[:, 0]
+    future = unyaw(ctx.ref.extras[FUTURE_POS] - root_pos[:, None, None], c, sn)
     return torch.cat(
         [root_offset, ref.qpos[:, 7:] - s.qpos[:, 7:], future.reshape(n, -1)], dim=-1
     ).float()
