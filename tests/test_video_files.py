@@ -1,0 +1,42 @@
+"""Video files written by `character retarget`, `motion show` and `play`: GIF and MP4 decode
+back to the frames' size and count."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from retarget.character_view import save_video
+
+
+def frames(count: int = 12) -> list[np.ndarray]:
+    """A moving white square on black (H.264 needs even sizes: 64x48)."""
+    out = []
+    for k in range(count):
+        f = np.zeros((48, 64, 3), np.uint8)
+        f[10:26, 4 * k : 4 * k + 16] = 255
+        out.append(f)
+    return out
+
+
+def test_mp4_round_trip(tmp_path: Path) -> None:
+    iio = pytest.importorskip("imageio.v3")
+    pytest.importorskip("imageio_ffmpeg")
+    path = tmp_path / "clip.mp4"
+    save_video(frames(), path, fps=36.0)
+    back = iio.imread(path)
+    assert back.shape == (12, 48, 64, 3)
+    # lossy, but the square is where it was drawn
+    assert back[5, 12:24, 22:34].mean() > 200 and back[5, 30:, :].mean() < 30
+
+
+def test_gif_round_trip(tmp_path: Path) -> None:
+    from PIL import Image, ImageSequence
+
+    path = tmp_path / "clip.gif"
+    save_video(frames(), path, fps=36.0)
+    with Image.open(path) as im:
+        assert im.size == (64, 48)
+        assert sum(1 for _ in ImageSequence.Iterator(im)) == 12
