@@ -184,3 +184,33 @@ def test_missing_requirement_is_caught_before_building(tmp_path: Path) -> None:
     reg = load_plugins(strict=True, modules={"tiny": TinyPlugins(), "tail": Plugins()})
     err = error_of(write(tmp_path, "character: tiny\nrewards:\n  needs_tail: {}\n"), reg)
     assert err.field == "rewards.needs_tail" and "site:tail_tip" in err.message
+
+
+def test_characters_without_a_recipe_file_get_their_table2_column(tmp_path) -> None:
+    """`--character dino|oppy` alone starts from the character's packaged recipe; the human and
+    Jesse keep the default (Jesse's column); a user's recipe file is used as written."""
+    import torch
+
+    from retarget.env.build import env_from_recipe
+    from retarget.loader import load_plugins
+    from retarget.recipe import load
+
+    registry = load_plugins()
+    for name in ("dino", "oppy"):
+        r = load(None, registry, shorthands={"character": name}, assignments=[])
+        cfg = {k.split(".", 1)[1]: c.config for k, c in r.components.items() if "." in k}
+        assert cfg["foot_contact"].weight == 1.5
+        assert cfg["action_diff"].k == 150.0
+        assert cfg["link_pos"].bodies == ["root"]
+        env = env_from_recipe(r, num_envs=2, threads=1)
+        env.reset()
+        _, reward, *_ = env.step(torch.zeros(2, env.action_dim))
+        assert torch.isfinite(reward).all()
+    for name in ("human", "jesse"):
+        r = load(None, registry, shorthands={"character": name}, assignments=[])
+        assert "rewards.foot_contact" not in r.components
+        assert r.components["rewards.joint_pos"].config.weight == 4.0
+    own = tmp_path / "mine.yaml"
+    own.write_text("character: dino\nrewards:\n  joint_pos: {weight: 3.0}\n")
+    r = load(str(own), registry, shorthands={"character": "dino"}, assignments=[])
+    assert [k for k in r.components if k.startswith("rewards.")] == ["rewards.joint_pos"]

@@ -1,4 +1,11 @@
-"""The packaged default recipe (``retarget train`` with no recipe file uses it)."""
+"""The packaged recipes that ``retarget <verb>`` uses when no recipe file is given.
+
+``default.yaml`` carries Jesse's column of the paper's Table 2 (a human-like body). Characters
+whose bodies differ from a human's get their own column: ``--character dino`` without a recipe
+file starts from ``dino.yaml`` (likewise ``oppy.yaml``), so the main command trains each body
+with the reward weights the paper gives it. A recipe file given by the user is always used as
+written.
+"""
 
 from __future__ import annotations
 
@@ -6,5 +13,18 @@ from importlib.resources import files
 from pathlib import Path
 
 
-def default_recipe_path() -> Path:
-    return Path(str(files("retarget.recipes").joinpath("default.yaml")))
+def packaged_recipe(name: str) -> Path | None:
+    """The packaged recipe ``NAME.yaml``, or None."""
+    path = Path(str(files("retarget.recipes").joinpath(f"{name}.yaml")))
+    return path if path.is_file() else None
+
+
+def default_recipe_path(character: str | None = None) -> Path:
+    """The character's packaged recipe if it has one, else ``default.yaml``."""
+    if character:
+        own = packaged_recipe(character)
+        if own is not None:
+            return own
+    path = packaged_recipe("default")
+    assert path is not None, "retarget.recipes/default.yaml is missing from the installation"
+    return path

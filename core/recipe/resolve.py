@@ -174,6 +174,9 @@ def load(
     from retarget.recipe.overrides import apply_overrides
     from retarget.recipe.source import read_recipe_file
 
-    source = read_recipe_file(path if path is not None else default_recipe_path())
+    if path is None:
+        character = (shorthands or {}).get("character")
+        path = default_recipe_path(character)
+    source = read_recipe_file(path)
     source = apply_overrides(source, shorthands=shorthands, assignments=assignments)
     return resolve(source, registry)
