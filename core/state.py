@@ -31,8 +31,8 @@ class Layout:
     site_names: tuple[str, ...]  # role names, in the order of site_pos/site_quat
     site_ids: tuple[int, ...]  # MuJoCo site ids of those roles in the compiled model
     body_groups: Mapping[str, tuple[int, ...]]
-    nq: int
-    nv: int
+    nq: int  # the character's generalized coordinates: qpos[:nq] (scene joints come after)
+    nv: int  # the character's degrees of freedom: qvel[:nv]
     joint_weights: tuple[float, ...] = ()
     torque_limits: tuple[float, ...] = ()
     passive_joints: tuple[str, ...] = ()
@@ -145,8 +145,10 @@ class StepContext:
 
     def select(self, idx: torch.Tensor) -> StepContext:
         """The same step restricted to environments ``idx`` (used to check batch invariance)."""
+        scene = self.scene.select(idx) if hasattr(self.scene, "select") else self.scene
         return replace(
             self,
+            scene=scene,
             sim=self.sim.select(idx),
             ref=self.ref.select(idx),
             action=self.action[idx],

@@ -63,6 +63,40 @@ def build_world(character: Character, scene: Scene | None = None) -> World:
     return World(model=model, layout=layout_of(character, model, body_names), spec=spec)
 
 
+_QPOS_SIZE = {
+    mujoco.mjtJoint.mjJNT_FREE: (7, 6),
+    mujoco.mjtJoint.mjJNT_BALL: (4, 3),
+    mujoco.mjtJoint.mjJNT_SLIDE: (1, 1),
+    mujoco.mjtJoint.mjJNT_HINGE: (1, 1),
+}
+
+
+def _character_dofs(
+    character: Character, model: mujoco.MjModel, body_names: tuple[str, ...]
+) -> tuple[int, int]:
+    """``(nq, nv)`` of the character alone: a scene's articulated props add joints after it.
+
+    The character's spec is compiled first, so its joints are the leading block of ``qpos`` and
+    ``qvel``; a scene joint inside that block would break every ``qpos[:, 7:]`` slice, so it is
+    an error rather than a silent mix.
+    """
+    names = set(body_names)
+    nq = nv = 0
+    for j in range(model.njnt):
+        body = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_BODY, model.jnt_bodyid[j])
+        if body not in names:
+            continue
+        q, v = _QPOS_SIZE[mujoco.mjtJoint(model.jnt_type[j])]
+        if model.jnt_qposadr[j] != nq or model.jnt_dofadr[j] != nv:
+            raise _fail(
+                character,
+                f"joint {mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_JOINT, j)} does not follow "
+                "the character's previous joints in qpos",
+            )
+        nq, nv = nq + q, nv + v
+    return nq, nv
+
+
 def layout_of(character: Character, model: mujoco.MjModel, body_names: tuple[str, ...]) -> Layout:
     """Names and index groups of the character inside ``model``."""
 
@@ -101,6 +135,7 @@ def layout_of(character: Character, model: mujoco.MjModel, body_names: tuple[str
     if unknown:
         raise _fail(character, f"joint_weights() names unknown joints: {', '.join(unknown)}")
     passive = tuple(character.passive_joints())
+    nq, nv = _character_dofs(character, model, body_names)
     gear = np.asarray(model.actuator_gear[:, 0], dtype=float)
     return Layout(
         body_names=body_names,
@@ -112,8 +147,8 @@ def layout_of(character: Character, model: mujoco.MjModel, body_names: tuple[str
             mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, s) for s in roles.values()
         ),
         body_groups=groups,
-        nq=model.nq,
-        nv=model.nv,
+        nq=nq,
+        nv=nv,
         joint_weights=tuple(float(weights.get(j, 1.0)) for j in joints),
         torque_limits=tuple(float(g) for g in gear),
         passive_joints=passive,

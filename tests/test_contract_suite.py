@@ -206,6 +206,24 @@ class FlatHeights(d.GoodScene):
         return torch.zeros(xy.shape[0])
 
 
+class GhostMocap(d.GoodScene):
+    """Names a mocap body its build never adds."""
+
+    name = "ghost_mocap"
+
+    def mocap_bodies(self):
+        return ("no_such_prop",)
+
+
+class OnePlacement(d.GoodScene):
+    """Ignores allocate(): every query answers for one environment only."""
+
+    name = "one_placement"
+
+    def height_at(self, xy):
+        return torch.zeros(1, xy.shape[1])
+
+
 class NanUpdate(d.GoodAlgorithm):
     """Reports a NaN loss."""
 
@@ -277,6 +295,8 @@ BROKEN = [
     (checks.check_character_zero_torque_steps, Unstable),
     (checks.check_scene_composes, BrokenBuild),
     (checks.check_scene_queries, FlatHeights),
+    (checks.check_scene_placement, GhostMocap),
+    (checks.check_scene_placement, OnePlacement),
     (checks.check_algorithm_update, NanUpdate),
     (checks.check_algorithm_checkpoint, ForgetfulCheckpoint),
     (checks.check_motion_format_reads_sample, NotAClip),

@@ -25,6 +25,8 @@ import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
+import mujoco
+import numpy as np
 import torch
 
 from retarget.env.managers import RewardManager, TerminationManager
@@ -36,7 +38,7 @@ from retarget.env.observations import (
     proprio_size,
 )
 from retarget.env.reference import CharacterReference
-from retarget.errors import RecipeError
+from retarget.errors import PluginError, RecipeError
 from retarget.kinds import Character, Observer, RewardTerm, Scene, Sensor, Termination
 from retarget.motion.clip import MotionClip
 from retarget.motion.library import MotionLibrary
@@ -83,6 +85,7 @@ class RetargetEnv:
         self.library = MotionLibrary(clips, fps=hz)
         self.reference = CharacterReference(character, self.world.model, layout, clips)
         self.sim = BatchedSim(self.world.model, layout, n, opts.sim)
+        self._mocap_ids = self._scene_mocap_ids()
         self.sensors, self.observers = list(sensors), list(observers)
         for plugin in (*self.sensors, *self.observers):
             plugin.bind(layout)
@@ -121,6 +124,24 @@ class RetargetEnv:
             ("reference", "rewards", "terminations", "observations", "resets"), 0.0
         )
         self._ctx: StepContext | None = None
+
+    def _scene_mocap_ids(self) -> np.ndarray:
+        """Indices into ``mocap_pos`` of the scene's props, resolved once; sizes the scene's
+        per-environment placement state."""
+        scene, model = self.scene, self.world.model
+        if scene is None:
+            return np.zeros(0, dtype=np.intp)
+        scene.allocate(self.num_envs)
+        ids = []
+        for body in scene.mocap_bodies():
+            bid = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body)
+            if bid < 0 or model.body_mocapid[bid] < 0:
+                raise PluginError(
+                    f"mocap_bodies() names '{body}', which is not a mocap body of the model",
+                    plugin=f"scene {scene.name}",
+                )
+            ids.append(int(model.body_mocapid[bid]))
+        return np.asarray(ids, dtype=np.intp)
 
     # ------------------------------------------------------------------ observations
 
@@ -200,7 +221,13 @@ class RetargetEnv:
         rows = self.library.rows(clip, frame)[:, 0].numpy()
         qpos = self.reference.qpos64[rows].copy()
         qpos[:, 2] += self.options.reset_lift
-        self.sim.reset(env_ids.numpy(), qpos, self.reference.qvel64[rows])
+        mocap = None
+        if self.scene is not None:  # a new episode gets new prop placements (Sec. 3.4)
+            self.scene.randomize(env_ids, self.generator)
+            if self._mocap_ids.size:
+                pos, quat = self.scene.mocap_poses(env_ids)
+                mocap = (self._mocap_ids, pos.numpy(), quat.numpy())
+        self.sim.reset(env_ids.numpy(), qpos, self.reference.qvel64[rows], mocap)
         self.episode_step[env_ids] = 0
         self.episode_return[env_ids] = 0.0
         self.prev_action[env_ids] = 0.0
@@ -282,6 +309,7 @@ class RetargetEnv:
             "generator": self.generator.get_state(),
             "nan_resets": self.nan_resets,
             "total_steps": self.total_steps,
+            "scene": self.scene.state_dict() if hasattr(self.scene, "state_dict") else {},
         }
 
     def load_state_dict(self, state: Mapping) -> dict[str, torch.Tensor]:
@@ -299,6 +327,8 @@ class RetargetEnv:
         self.generator.set_state(state["generator"])
         self.nan_resets = int(state["nan_resets"])
         self.total_steps = int(state["total_steps"])
+        if state.get("scene") and hasattr(self.scene, "load_state_dict"):
+            self.scene.load_state_dict(state["scene"])
         self._ctx = self._context(self.prev_action)
         return self.observe(self._ctx)
 

@@ -86,6 +86,9 @@ class CharacterReference:
             for k, s in enumerate(sites):
                 mujoco.mju_mat2Quat(arrays["site_quat"][f, k], data.site_xmat[s])
         ang, lin = body_velocities(cvel, arrays["body_pos"], com)
+        # the character's block only: joints of articulated scene props follow it and keep
+        # their defaults at resets
+        qpos, qvel = qpos[:, : layout.nq], qvel[:, : layout.nv]
         arrays["body_angvel"], arrays["body_linvel"] = ang, lin
         f32 = torch.float32
         self.qpos = torch.as_tensor(qpos, dtype=f32)

@@ -20,6 +20,14 @@ class Scene(Plugin):
     ``build`` adds geometry to a world spec (the floor is the scene's job too).
     ``height_at`` answers height queries for many points of many environments at once, which
     is what the height-map observer uses instead of per-point ray casts.
+
+    All environments share one compiled model, so a scene whose props move between episodes
+    (scene randomization) places them as *mocap bodies*: their poses are per-environment state.
+    The environment calls :meth:`allocate` once with its number of environments, then on every
+    reset :meth:`randomize` for the reset environments and writes :meth:`mocap_poses` into the
+    simulation. Queries then answer for each environment's own placement: ``height_at`` takes
+    ``(N, K, 2)`` with ``N`` the allocated environments (or any ``N`` before ``allocate``, at
+    the default placement), and :meth:`select` gives the view of a subset.
     """
 
     kind: ClassVar[str] = "scene"
@@ -34,8 +42,32 @@ class Scene(Plugin):
 
     @abstractmethod
     def surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
-        """``count`` points sampled on the scene's surfaces, world frame ``(count, 3)``."""
+        """``count`` points sampled on the scene's surfaces, world frame ``(N, count, 3)``.
+
+        ``N`` is the number of allocated environments (1 before :meth:`allocate`, and a
+        static scene may always return one row, which holds for every environment); every
+        environment gets the same samples on its props, placed where that environment's props
+        are, so rows differ only by placement.
+        """
         ...
+
+    def allocate(self, num_envs: int) -> None:
+        """Size the per-environment placement state (static scenes ignore this)."""
 
     def randomize(self, env_ids: torch.Tensor, generator: torch.Generator) -> None:
         """Re-draw per-episode placement noise for ``env_ids`` (static scenes ignore this)."""
+
+    def select(self, env_ids: torch.Tensor) -> Scene:
+        """The scene as seen by environments ``env_ids`` only (static scenes are themselves)."""
+        return self
+
+    def mocap_bodies(self) -> tuple[str, ...]:
+        """Names of the mocap bodies whose poses :meth:`mocap_poses` gives, in that order."""
+        return ()
+
+    def mocap_poses(self, env_ids: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Positions ``(E, M, 3)`` and ``wxyz`` quaternions ``(E, M, 4)`` of the mocap bodies
+        for environments ``env_ids`` (``M = len(mocap_bodies())``)."""
+        e = int(env_ids.numel())
+        quat = torch.zeros(e, 0, 4, dtype=torch.float64)
+        return torch.zeros(e, 0, 3, dtype=torch.float64), quat

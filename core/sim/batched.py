@@ -103,14 +103,17 @@ class BatchedSim:
         self._site_xpos = self.batch.bind("site_xpos")
         self._site_xquat = self.batch.bind("site_xquat")
         self._cfrc = self.batch.bind("cfrc_ext")
+        self._mocap_pos = self.batch.bind("mocap_pos")  # (N, nmocap, 3): scene props' poses
+        self._mocap_quat = self.batch.bind("mocap_quat")  # (N, nmocap, 4) wxyz
+        self._nq, self._nv = layout.nq, layout.nv  # the character's block; scene joints follow
         self._bodies = np.asarray(layout.body_ids, dtype=np.intp)
         self._tree_roots = np.asarray(model.body_rootid[self._bodies], dtype=np.intp)
         self._sites = np.asarray(layout.site_ids, dtype=np.intp)
         n, b, s = num_envs, len(self._bodies), len(self._sites)
         f32 = np.float32
         self._buf = {
-            "qpos": np.zeros((n, model.nq), f32),
-            "qvel": np.zeros((n, model.nv), f32),
+            "qpos": np.zeros((n, layout.nq), f32),
+            "qvel": np.zeros((n, layout.nv), f32),
             "body_pos": np.zeros((n, b, 3), f32),
             "body_quat": np.zeros((n, b, 4), f32),
             "body_linvel": np.zeros((n, b, 3), f32),
@@ -149,20 +152,53 @@ class BatchedSim:
         self.seconds["gather"] += time.perf_counter() - t1
         return bad
 
-    def reset(self, env_ids: np.ndarray, qpos: np.ndarray, qvel: np.ndarray | None = None) -> None:
+    def reset(
+        self,
+        env_ids: np.ndarray,
+        qpos: np.ndarray,
+        qvel: np.ndarray | None = None,
+        mocap: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    ) -> None:
         """Put ``env_ids`` into the given state (e.g. a reference frame for RSI) and recompute
-        derived quantities for them only."""
+        derived quantities for them only.
+
+        ``qpos``/``qvel`` may cover only the leading (character) coordinates: the rest (joints
+        of articulated scene props) keep the model's defaults. ``mocap`` is ``(ids, pos, quat)``:
+        mocap body ids ``(M,)`` and their poses ``(E, M, 3)``/``(E, M, 4)`` for these envs.
+        """
         env_ids = np.asarray(env_ids, dtype=np.intp)
         if env_ids.size == 0:
             return
         time = self._time[env_ids].copy()
         self.batch.reset(env_ids, stage=mujoco.mjtStage.mjSTAGE_NONE)
         self._time[env_ids] = time
-        self._qpos[env_ids] = qpos
-        self._qvel[env_ids] = 0.0 if qvel is None else qvel
+        self._qpos[env_ids, : qpos.shape[-1]] = qpos
+        if qvel is not None:
+            self._qvel[env_ids, : qvel.shape[-1]] = qvel
         self._ctrl[env_ids] = 0.0
+        if mocap is not None and len(mocap[0]):
+            self.set_mocap(env_ids, *mocap, forward=False)
         self.batch.forward(env_ids)
         self.gather(env_ids)
+
+    def set_mocap(
+        self,
+        env_ids: np.ndarray,
+        ids: np.ndarray,
+        pos: np.ndarray,
+        quat: np.ndarray,
+        *,
+        forward: bool = True,
+    ) -> None:
+        """Write poses ``(E, M, 3)``/``(E, M, 4)`` of mocap bodies ``ids`` ``(M,)`` (indices
+        into ``mocap_pos``) for ``env_ids``: one fancy-indexed write per field, no loop."""
+        env_ids = np.asarray(env_ids, dtype=np.intp)
+        rows = np.ix_(env_ids, np.asarray(ids, dtype=np.intp))
+        self._mocap_pos[rows] = pos
+        self._mocap_quat[rows] = quat
+        if forward and env_ids.size:
+            self.batch.forward(env_ids)
+            self.gather(env_ids)
 
     # ------------------------------------------------------------------ gathering
 
@@ -172,8 +208,8 @@ class BatchedSim:
         rows: slice | np.ndarray = slice(None) if env_ids is None else env_ids
         sel = np.ix_(np.arange(self.num_envs)[rows], self._bodies)
         buf = self._buf
-        buf["qpos"][rows] = self._qpos[rows]
-        buf["qvel"][rows] = self._qvel[rows]
+        buf["qpos"][rows] = self._qpos[rows, : self._nq]
+        buf["qvel"][rows] = self._qvel[rows, : self._nv]
         xpos = self._xpos[sel]
         buf["body_pos"][rows] = xpos
         buf["body_quat"][rows] = self._xquat[sel]
@@ -186,7 +222,16 @@ class BatchedSim:
         buf["site_quat"][rows] = self._site_xquat[sites]
         buf["contact_force"][rows] = np.linalg.norm(self._cfrc[sel][..., 3:], axis=-1)
 
-    STATE_FIELDS = ("qpos", "qvel", "act", "ctrl", "time", "qacc_warmstart")
+    STATE_FIELDS = (
+        "qpos",
+        "qvel",
+        "act",
+        "ctrl",
+        "time",
+        "qacc_warmstart",
+        "mocap_pos",
+        "mocap_quat",
+    )
     """What a checkpoint needs for the next step to be bit-identical to an uninterrupted run."""
 
     def state_dict(self) -> dict[str, np.ndarray]:
@@ -194,7 +239,8 @@ class BatchedSim:
 
     def load_state_dict(self, state: dict[str, np.ndarray]) -> None:
         for key in self.STATE_FIELDS:
-            self.batch.bind(key)[:] = state[key]
+            if key in state:  # checkpoints written before mocap props keep model defaults
+                self.batch.bind(key)[:] = state[key]
         self.batch.forward()
         self.gather()
 

@@ -310,8 +310,54 @@ def check_scene_queries(plugin: object) -> None:
         assert tuple(h.shape) == (n, 9), f"height_at shape {tuple(h.shape)} != {(n, 9)}"
         assert h.dtype == torch.float32 and torch.isfinite(h).all(), "height_at must be finite f32"
     pts = scene.surface_points(64, np.random.default_rng(0))
-    assert pts.shape == (64, 3) and np.isfinite(pts).all(), "surface_points must be (count, 3)"
+    assert pts.shape == (1, 64, 3) and np.isfinite(pts).all(), (
+        f"surface_points before allocate() must be (1, count, 3), got {pts.shape}"
+    )
     scene.randomize(torch.tensor([0, 2]), torch.Generator().manual_seed(0))
+
+
+def check_scene_placement(plugin: object) -> None:
+    """Per-environment placement: allocate, randomize, query all envs and a subset, and the
+    mocap bodies the scene names exist in the compiled world as mocap bodies."""
+    scene = make(plugin)
+    world = build_world(TinyCharacter(), scene)
+    m = world.model
+    ids = []
+    for body in scene.mocap_bodies():
+        bid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body)
+        assert bid >= 0 and m.body_mocapid[bid] >= 0, (
+            f"mocap_bodies() names '{body}', which is not a mocap body of the compiled world"
+        )
+        ids.append(bid)
+    n = 5
+    scene.allocate(n)
+    scene.randomize(torch.arange(n), torch.Generator().manual_seed(1))
+    pos, quat = scene.mocap_poses(torch.arange(n))
+    k = len(ids)
+    assert tuple(pos.shape) == (n, k, 3) and tuple(quat.shape) == (n, k, 4), (
+        f"mocap_poses shapes {tuple(pos.shape)}, {tuple(quat.shape)} != {(n, k, 3)}, {(n, k, 4)}"
+    )
+    assert torch.isfinite(pos).all() and torch.allclose(
+        quat.norm(dim=-1), torch.ones(()).to(quat.dtype), atol=1e-6
+    ), "mocap_poses must be finite positions and unit quaternions"
+    xy = torch.rand(n, 11, 2, generator=torch.Generator().manual_seed(2)) * 6 - 3
+    h = scene.height_at(xy)
+    assert tuple(h.shape) == (n, 11) and torch.isfinite(h).all(), "height_at after allocate()"
+    sub = torch.tensor([1, 4])
+    assert torch.allclose(scene.select(sub).height_at(xy[sub]), h[sub], atol=1e-6), (
+        "select(ids).height_at differs from the same rows of the full batch"
+    )
+    pts = scene.surface_points(32, np.random.default_rng(0))
+    assert pts.shape in ((n, 32, 3), (1, 32, 3)) and np.isfinite(pts).all(), (
+        f"surface_points after allocate({n}) must be ({n} or 1, count, 3), got {pts.shape}"
+    )
+    pts = np.broadcast_to(pts, (n, 32, 3))
+    part = scene.select(sub).surface_points(32, np.random.default_rng(0))
+    if part.shape[0] != len(sub):  # a static scene: one row, or select() is the scene itself
+        part = np.broadcast_to(part, (n, 32, 3))[sub.numpy()]
+    assert np.allclose(part, pts[sub.numpy()], atol=1e-6), (
+        "select(ids).surface_points differs from the same rows of the full batch"
+    )
 
 
 # ---------------------------------------------------------------- algorithms
@@ -423,7 +469,7 @@ BY_KIND: dict[str, tuple[Check, ...]] = {
         check_character_torque_limits,
         check_character_zero_torque_steps,
     ),
-    "scene": (check_scene_composes, check_scene_queries),
+    "scene": (check_scene_composes, check_scene_queries, check_scene_placement),
     "algorithm": (check_algorithm_update, check_algorithm_checkpoint),
     "motion_format": (check_motion_format_reads_sample, check_motion_format_rejects_garbage),
     "command": (check_command_arguments,),

@@ -123,8 +123,8 @@ class FlatScene(Scene):
         return torch.zeros(xy.shape[:-1], dtype=torch.float32)
 
     def surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
-        pts = rng.uniform(-2.0, 2.0, size=(count, 3))
-        pts[:, 2] = 0.0
+        pts = rng.uniform(-2.0, 2.0, size=(1, count, 3))
+        pts[..., 2] = 0.0
         return pts
 
 

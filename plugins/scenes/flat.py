@@ -1,0 +1,53 @@
+"""``flat``: the floor alone (z = 0), the scene every other scene is built on."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import torch
+from pydantic import Field
+
+import retarget
+from retarget.kinds import PluginConfig, Scene
+from retarget.world import add_floor
+
+
+class FlatConfig(PluginConfig):
+    extent: float = Field(
+        2.0, gt=0, description="half side (m) of the square around the origin surface points fill"
+    )
+
+
+class Flat(Scene):
+    """An infinite flat floor at z = 0; nothing to randomize.
+
+    The floor has no props, so its surface points are drawn on the floor inside a square of
+    half side ``extent`` around the origin (other scenes leave the floor out of their points).
+    """
+
+    name = "flat"
+    Config = FlatConfig
+
+    def __init__(self, config: PluginConfig | None = None) -> None:
+        super().__init__(config)
+        self._num_envs = 1
+
+    def build(self, spec: mujoco.MjSpec) -> None:
+        add_floor(spec)
+
+    def allocate(self, num_envs: int) -> None:
+        self._num_envs = num_envs
+
+    def height_at(self, xy: torch.Tensor) -> torch.Tensor:
+        return torch.zeros(xy.shape[:-1], dtype=torch.float32)
+
+    def surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
+        e = self.config.extent
+        pts = np.zeros((count, 3))
+        pts[:, :2] = rng.uniform(-e, e, size=(count, 2))
+        return np.broadcast_to(pts, (self._num_envs, count, 3)).copy()
+
+
+@retarget.hookimpl
+def register_scenes(register) -> None:
+    register(Flat)
