@@ -1,0 +1,1 @@
+"""Built-in observers: what the policy perceives of the scene around the character."""
