@@ -22,7 +22,7 @@ from pydantic import Field
 
 import retarget
 from retarget import Layout, Observer, ObsSpec, PluginConfig, StepContext
-from retarget.heading import to_heading_points
+from retarget.heading import heading_cos_sin, unyaw
 
 
 class PointCloudConfig(PluginConfig):
@@ -82,13 +82,18 @@ class PointCloud(Observer):
             return out
         pool = self._refresh(ctx)
         root = ctx.sim.qpos[:, :3].float()
-        near = (pool - root[:, None]).square().sum(-1) <= self.config.radius**2  # (N, P)
+        rel = pool - root[:, None]  # (N, P, 3)
+        near = rel.square().sum(-1) <= self.config.radius**2
         slot = near.cumsum(dim=1) - 1
         keep = near & (slot < k)
-        env = torch.arange(n)[:, None].expand_as(keep)
-        local = to_heading_points(pool, root, ctx.sim.qpos[:, 3:7].float())
-        out[env[keep], slot[keep], :3] = local[keep]
-        out[env[keep], slot[keep], 3] = 1.0
+        env = torch.arange(n)[:, None].expand_as(keep)[keep]
+        slot = slot[keep]
+        out[env, slot, :3] = rel[keep]  # only the kept points are turned into the heading frame
+        out[env, slot, 3] = 1.0
+        c, sn = heading_cos_sin(ctx.sim.qpos[:, 3:7].float())
+        local = unyaw(out[..., :3], c, sn)
+        local[..., 2] += root[:, 2:3] * out[..., 3]  # z: world height (padding stays 0)
+        out[..., :3] = local
         return out
 
 
