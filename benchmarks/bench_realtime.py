@@ -12,7 +12,10 @@ Measured in the same run, all on one thread:
   one observation (onnxruntime only when the ``export`` extra is installed).
 * ``env frame``: a whole ``RetargetEnv.step`` with batch 1 plus the torch policy. This is an
   upper bound on deployment: it also computes the training reference, rewards and
-  terminations, which a headset application does not need; its observation share is printed.
+  terminations, which a headset application does not need; its observation share (the actor
+  group only: sensors + proprioception, as deployed) is printed.
+* ``deploy_ms`` = physics + policy (onnxruntime when available) + observations: the frame cost
+  of a headset application.
 
 Without ``--run`` the policy is an untrained PPO actor of the paper's sizes (same cost).
 """
@@ -63,7 +66,10 @@ def main() -> None:
         from retarget.env.build import env_from_recipe
 
         shorthands = {"character": args.character, "sensors": args.sensors}
-        resolved = load(None, registry, shorthands=shorthands, assignments=["sim.threads=1"])
+        # deployment computes only what the actor reads: sensors + proprioception (no critic)
+        actor = ", ".join([*args.sensors.split(","), "proprio"])
+        sets = ["sim.threads=1", f"env.groups={{actor: [{actor}]}}"]
+        resolved = load(None, registry, shorthands=shorthands, assignments=sets)
         env = env_from_recipe(resolved, num_envs=1, threads=1)
         algorithm = resolved.component("algorithm").instantiate()
         algorithm.setup(env, torch.Generator().manual_seed(0))
