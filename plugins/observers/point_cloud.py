@@ -12,6 +12,16 @@ The pool of an environment is redrawn after it resets (its props may have moved)
 reset environments' pools are re-placed, from the same samples (a fixed ``seed``), so two
 environments with the same placement see the same points. The floor counts as a surface only
 in scenes that say so (``flat``, meshes with a floor); props' undersides on the floor do not.
+
+Cost: testing every pool point every step was most of the work (N x pool distances), and
+most points are metres away. So the pool is kept sorted along a Z-order curve of ``cell``-sized
+horizontal cells (one order, taken from the first placement: placements differ by centimetres)
+and cut into chunks of ``chunk`` consecutive points, each environment holding its own chunk
+bounding boxes. A step tests the root's sphere against the boxes, gathers only the reached
+(environment, chunk) pairs' points, and restores pool order among the points in range by their
+original pool index: the result equals the full scan's exactly, at about a tenth of its cost
+(``benchmarks/bench_observers.py``). Prop scenes' samples are drawn once in the props' frames
+and only re-placed at resets.
 """
 
 from __future__ import annotations
@@ -30,6 +40,27 @@ class PointCloudConfig(PluginConfig):
     radius: float = Field(1.0, gt=0, description="metres from the root a point may be")
     pool: int = Field(8192, ge=1, description="surface samples held per environment")
     seed: int = Field(0, description="seed of the surface samples")
+    chunk: int = Field(64, ge=1, description="pool points per spatial chunk (the pre-filter)")
+    cell: float = Field(0.1, gt=0, description="metres of the Z-order cells chunks follow")
+
+
+def _spread_bits(v: torch.Tensor) -> torch.Tensor:
+    """Interleave zeros between the low 16 bits of ``v`` (int64), for a Morton code."""
+    v = v & 0xFFFF
+    v = (v | (v << 8)) & 0x00FF00FF
+    v = (v | (v << 4)) & 0x0F0F0F0F
+    v = (v | (v << 2)) & 0x33333333
+    return (v | (v << 1)) & 0x55555555
+
+
+def morton_order(xy: torch.Tensor, cell: float) -> torch.Tensor:
+    """Per row, the permutation sorting points ``(E, C, 2)`` along a Z-order curve of
+    ``cell``-sized cells; ties keep pool order (so each cell's points stay a random sample)."""
+    ij = torch.floor(xy / cell).long()
+    ij = ij - ij.amin(dim=1, keepdim=True)
+    code = _spread_bits(ij[..., 0]) | (_spread_bits(ij[..., 1]) << 1)
+    rank = torch.arange(xy.shape[1])
+    return torch.argsort(code * xy.shape[1] + rank, dim=1)
 
 
 class PointCloud(Observer):
@@ -40,8 +71,13 @@ class PointCloud(Observer):
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         super().__init__(config)
-        self._pool: torch.Tensor | None = None  # (N, pool, 3) world
+        self._pool: torch.Tensor | None = None  # (N, chunks * chunk, 3) world, Z-ordered
+        self._rank: torch.Tensor | None = None  # (N, chunks * chunk) pool index (pad: pool)
+        self._lo: torch.Tensor | None = None  # (N, chunks, 3) chunk bounding boxes
+        self._hi: torch.Tensor | None = None
         self._scene: object = None
+        self._order: torch.Tensor | None = None  # (pool,) Z-order of the first placement
+        self._local: torch.Tensor | None = None  # prop-frame samples of a prop scene
         self._dirty: torch.Tensor | None = None
         self._any_dirty = False
 
@@ -55,45 +91,82 @@ class PointCloud(Observer):
 
     def _sample(self, scene, rows: int) -> torch.Tensor:
         rng = np.random.default_rng(self.config.seed)
-        pts = torch.from_numpy(np.asarray(scene.surface_points(self.config.pool, rng)))
+        if hasattr(scene, "place_surface_points"):  # prop scenes: draw once, place per reset
+            if self._local is None:
+                self._local = torch.from_numpy(scene.local_surface_points(self.config.pool, rng))
+            pts = scene.place_surface_points(self._local)
+        else:
+            pts = torch.from_numpy(np.asarray(scene.surface_points(self.config.pool, rng)))
         pts = pts.reshape(-1, self.config.pool, 3).float()
         if pts.shape[0] != rows:  # a static scene: the same points for every environment
             pts = pts[:1].expand(rows, -1, -1)
         return pts
 
-    def _refresh(self, ctx: StepContext) -> torch.Tensor:
+    def _chunked(self, pts: torch.Tensor) -> tuple[torch.Tensor, ...]:
+        """Z-ordered, padded points, their pool indices and chunk boxes for rows ``pts``."""
+        e, c = pts.shape[:2]
+        size = self.config.chunk
+        chunks = -(-c // size)
+        if self._order is None:
+            # one order for every environment: placements differ by centimetres, so the first
+            # one's cells stay compact for all; the boxes below are each row's own, so an
+            # order only affects how tight they are, never which points are found
+            self._order = morton_order(pts[:1, :, :2], self.config.cell)[0]
+        order = self._order
+        rank = torch.full((e, chunks * size), c, dtype=torch.int32)
+        rank[:, :c] = order
+        sorted_pts = pts[:, order]
+        # padding repeats the last point, so it never widens a box; its rank marks it out
+        padded = torch.cat([sorted_pts, sorted_pts[:, -1:].expand(-1, chunks * size - c, -1)], 1)
+        boxes = padded.reshape(e, chunks, size, 3)
+        return padded.contiguous(), rank, boxes.amin(2), boxes.amax(2)
+
+    def _refresh(self, ctx: StepContext) -> None:
         n = ctx.num_envs
         if self._pool is None or self._scene is not ctx.scene or self._pool.shape[0] != n:
-            self._pool = self._sample(ctx.scene, n).clone()
+            self._order = self._local = None
+            self._pool, self._rank, self._lo, self._hi = self._chunked(self._sample(ctx.scene, n))
             self._scene = ctx.scene
             self._dirty = torch.zeros(n, dtype=torch.bool)
             self._any_dirty = False
         elif self._any_dirty:
             ids = self._dirty.nonzero()[:, 0]
-            self._pool[ids] = self._sample(ctx.scene.select(ids), ids.shape[0])
+            parts = self._chunked(self._sample(ctx.scene.select(ids), ids.shape[0]))
+            for held, new in zip((self._pool, self._rank, self._lo, self._hi), parts, strict=True):
+                held[ids] = new
             self._dirty.zero_()
             self._any_dirty = False
-        return self._pool
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
-        n, k = ctx.num_envs, self.config.count
+        n, k, size = ctx.num_envs, self.config.count, self.config.chunk
         out = torch.zeros(n, k, 4)
         if ctx.scene is None:
             return out
-        pool = self._refresh(ctx)
+        self._refresh(ctx)
+        pool, rank, lo, hi = self._pool, self._rank, self._lo, self._hi
         root = ctx.sim.qpos[:, :3].float()
-        rel = pool - root[:, None]  # (N, P, 3)
-        near = rel.square().sum(-1) <= self.config.radius**2
-        slot = near.cumsum(dim=1) - 1
-        keep = near & (slot < k)
-        env = torch.arange(n)[:, None].expand_as(keep)[keep]
-        slot = slot[keep]
-        out[env, slot, :3] = rel[keep]  # only the kept points are turned into the heading frame
-        out[env, slot, 3] = 1.0
+        r2 = self.config.radius**2
+        # (environment, chunk) pairs whose box the root's sphere reaches (box-sphere distance)
+        gap = (root[:, None] - root[:, None].clamp(lo, hi)).square().sum(-1)  # (N, chunks)
+        env, chunk = (gap <= r2).nonzero(as_tuple=True)  # (H,) each
+        chunks, end = pool.shape[1] // size, self.config.pool
+        rel = pool.view(n, chunks, size, 3)[env, chunk] - root[env, None]  # (H, size, 3)
+        ranks = rank.view(n, chunks, size)[env, chunk]
+        near = ((rel * rel).sum(-1) <= r2) & (ranks < end)  # padding has rank ``end``
+        env = env[:, None].expand(-1, size)[near]
+        rel, ranks = rel[near], ranks[near].long()
+        # pool order within each environment: sort by (environment, pool index)
+        order = torch.argsort(env * end + ranks)
+        env, rel = env[order], rel[order]
+        counts = torch.bincount(env, minlength=n)
+        slot = torch.arange(env.shape[0]) - (counts.cumsum(0) - counts)[env]
+        keep = slot < k
+        env, slot, rel = env[keep], slot[keep], rel[keep]
         c, sn = heading_cos_sin(ctx.sim.qpos[:, 3:7].float())
-        local = unyaw(out[..., :3], c, sn)
-        local[..., 2] += root[:, 2:3] * out[..., 3]  # z: world height (padding stays 0)
-        out[..., :3] = local
+        local = unyaw(rel, c[env], sn[env])  # only the kept points enter the heading frame
+        local[:, 2] += root[env, 2]  # z: world height (padding stays 0)
+        out[env, slot, :3] = local
+        out[env, slot, 3] = 1.0
         return out
 
 

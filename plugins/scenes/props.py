@@ -8,8 +8,9 @@ per-environment state, written by the environment at every reset.
 
 Every query is batched over environments and loops only over the (few) primitives:
 
-* ``height_at``: each query point is moved into every primitive's frame, tested against its
-  footprint (rectangle or disc) and the highest top wins; the floor is 0.
+* ``height_at``: each query point is moved into the frame of every primitive of the props
+  near the queries (a footprint-circle test first), tested against its footprint (rectangle
+  or disc) and the highest top wins; the floor is 0.
 * ``surface_points``: points are drawn once per call on the primitives' faces (area weighted,
   in prop frames; faces lying on the floor are left out) and placed for every environment.
 
@@ -136,6 +137,29 @@ class _Tables:
     round: torch.Tensor  # (Q,) bool: cylinder footprint
     base: torch.Tensor  # (P, 3) default x, y, yaw
     parts: list[tuple[int, Part]] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        """Per-prop copies ``(P, M, ...)`` padded to the most parts of any prop (float32), and
+        each prop's ``reach``: the radius of its footprint around its origin."""
+        props = len(self.base)
+        count = torch.bincount(self.prop_of, minlength=props) if props else torch.zeros(0)
+        m = int(count.max()) if props else 0
+        self.valid = torch.zeros(props, m, dtype=torch.bool)
+        self.p_center = torch.zeros(props, m, 2)
+        self.p_half = torch.zeros(props, m, 2)
+        self.p_top = torch.zeros(props, m)
+        self.p_round = torch.zeros(props, m, dtype=torch.bool)
+        self.reach = torch.zeros(props)
+        slot = [0] * props
+        for q, prop in enumerate(self.prop_of.tolist()):
+            j, slot[prop] = slot[prop], slot[prop] + 1
+            self.valid[prop, j] = True
+            self.p_center[prop, j] = self.center[q].float()
+            self.p_half[prop, j] = self.half[q].float()
+            self.p_top[prop, j] = float(self.top[q])
+            self.p_round[prop, j] = bool(self.round[q])
+            far = float(self.center[q].norm() + self.half[q].norm())
+            self.reach[prop] = max(float(self.reach[prop]), far)
 
 
 def yaw_quat64(yaw: torch.Tensor) -> torch.Tensor:
@@ -292,21 +316,35 @@ class PropScene(Scene):
     # ---------------------------------------------------------------- queries
 
     def height_at(self, xy: torch.Tensor) -> torch.Tensor:
+        """Each environment tests only the props whose footprint circle reaches its query
+        points' bounding circle (a height map covers one or two of a room's props), each prop's
+        parts padded to the most any prop has; float32 keeps micrometres within a room."""
         n = xy.shape[0]
         t = self._tables
         if t.top.numel() == 0:
             return torch.zeros(xy.shape[:-1], dtype=torch.float32)
-        pose = self.placement(n)[:, t.prop_of]  # (N, Q, 4)
-        d = xy.double()[:, :, None, :] - pose[:, None, :, :2]  # (N, K, Q, 2)
-        c, s = torch.cos(pose[..., 3])[:, None], torch.sin(pose[..., 3])[:, None]
-        lx = c * d[..., 0] + s * d[..., 1] - t.center[:, 0]
-        ly = -s * d[..., 0] + c * d[..., 1] - t.center[:, 1]
-        inside_box = (lx.abs() <= t.half[:, 0]) & (ly.abs() <= t.half[:, 1])
-        inside_disc = lx * lx + ly * ly <= t.half[:, 0] ** 2
-        inside = torch.where(t.round, inside_disc, inside_box)
-        top = t.top + pose[..., 2]  # (N, Q)
-        h = torch.where(inside, top[:, None, :], torch.zeros((), dtype=torch.float64))
-        return h.amax(dim=-1).clamp_min(0.0).float()
+        xy = xy.float()
+        pose = self.placement(n).float()  # (N, P, 4)
+        lo, hi = xy.amin(1), xy.amax(1)  # (N, 2) box of the queries
+        reach = (hi - lo).norm(dim=-1, keepdim=True) / 2 + t.reach  # (N, P)
+        hit = (pose[..., :2] - (lo + hi)[:, None] / 2).norm(dim=-1) <= reach
+        env, prop = hit.nonzero(as_tuple=True)  # (H,) pairs to test
+        pose = pose[env, prop][:, None, None]  # (H, 1, 1, 4)
+        d = xy[env][:, :, None] - pose[..., :2]  # (H, K, 1, 2)
+        c, s = torch.cos(pose[..., 3]), torch.sin(pose[..., 3])
+        dx, dy = d[..., 0], d[..., 1]
+        center, half = t.p_center[prop][:, None], t.p_half[prop][:, None]  # (H, 1, M, 2)
+        lx = c * dx + s * dy - center[..., 0]
+        ly = c * dy - s * dx - center[..., 1]
+        inside_box = (lx.abs() <= half[..., 0]) & (ly.abs() <= half[..., 1])
+        inside_disc = lx * lx + ly * ly <= half[..., 0] ** 2
+        inside = torch.where(t.p_round[prop][:, None], inside_disc, inside_box)
+        inside &= t.valid[prop][:, None]
+        top = (t.p_top[prop] + pose[:, 0, :, 2])[:, None]  # (H, 1, M)
+        pair = torch.where(inside, top, torch.zeros(())).amax(-1)  # (H, K)
+        h = torch.zeros(xy.shape[:-1], dtype=torch.float32)
+        h.scatter_reduce_(0, env[:, None].expand_as(pair), pair, "amax")
+        return h.clamp_min(0.0)
 
     def local_surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
         """``(count, 4)``: prop index and x, y, z in that prop's frame (area-weighted)."""
@@ -326,12 +364,17 @@ class PropScene(Scene):
 
     def surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
         local = torch.from_numpy(self.local_surface_points(count, rng))
+        return self.place_surface_points(local).numpy()
+
+    def place_surface_points(self, local: torch.Tensor) -> torch.Tensor:
+        """Prop-frame samples ``(C, 4)`` (:meth:`local_surface_points`) placed for every
+        held environment ``(N, C, 3)``: callers that redraw often sample once and place many
+        times."""
         n = self._offsets.shape[0] if self._allocated else 1
         pose = self.placement(n)
         if local.shape[0] == 0 or pose.shape[1] == 0:
-            pts = torch.zeros(n, count, 3, dtype=torch.float64)
-            return pts.numpy()
-        return place_points(local, pose).numpy()
+            return torch.zeros(n, local.shape[0], 3, dtype=torch.float64)
+        return place_points(local, pose)
 
 
 def place_points(local: torch.Tensor, pose: torch.Tensor) -> torch.Tensor:

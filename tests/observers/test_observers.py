@@ -157,3 +157,41 @@ def test_point_cloud_follows_a_reset_envs_new_placement() -> None:
     obs.reset(torch.tensor([1]))
     second = obs.observe(ctx)
     assert torch.equal(second[0], first[0]) and not torch.equal(second[1], first[1])
+
+
+def _full_scan(pool: torch.Tensor, root: torch.Tensor, yaw: torch.Tensor, k: int, radius: float):
+    """The point cloud by brute force: every pool point tested, the first ``k`` in range kept."""
+    n = pool.shape[0]
+    out = torch.zeros(n, k, 4)
+    c, s = torch.cos(yaw), torch.sin(yaw)
+    for e in range(n):
+        rel = pool[e] - root[e]
+        rows = rel[rel.norm(dim=-1) <= radius][:k]
+        x, y = c[e] * rows[:, 0] + s[e] * rows[:, 1], -s[e] * rows[:, 0] + c[e] * rows[:, 1]
+        out[e, : len(rows)] = torch.stack([x, y, rows[:, 2] + root[e, 2], torch.ones(len(rows))], 1)
+    return out
+
+
+def test_point_cloud_chunk_prefilter_equals_a_full_scan() -> None:
+    from retarget.plugins.scenes.living_room import LivingRoom
+
+    scene = LivingRoom(LivingRoom.Config())
+    n = 6
+    scene.allocate(n)
+    scene.randomize(torch.arange(n), torch.Generator().manual_seed(3))
+    g = torch.Generator().manual_seed(4)
+    cfg = PointCloud.Config(count=400, pool=3000, chunk=32)
+    obs = PointCloud(cfg)
+    import numpy as np
+
+    pool = torch.from_numpy(scene.surface_points(cfg.pool, np.random.default_rng(cfg.seed))).float()
+    for _ in range(3):
+        root = torch.rand(n, 2, generator=g) * 4 - 2
+        yaw = torch.rand(n, generator=g) * 6
+        ctx = _ctx(scene, root, yaw, z=0.6)
+        got = obs.observe(ctx)
+        root3 = torch.cat([root, torch.full((n, 1), 0.6)], 1)
+        want = _full_scan(pool, root3, yaw, cfg.count, cfg.radius)
+        assert got[..., 3].sum() > 100  # the draw reaches props
+        assert torch.equal(got[..., 3], want[..., 3])
+        assert torch.allclose(got, want, atol=1e-5)
