@@ -61,6 +61,12 @@ class Layout:
             raise KeyError(f"no body group '{name}'; known: {known}") from None
 
 
+SCENE_CONTACTS = "scene_contacts"
+"""``ReferenceBatch.extras`` key of the reference's scene contact labels ``(N, G)`` bool: whether
+the kinematic reference touches the scene (floor included) with each body group, one column per
+group of ``Layout.body_groups`` in its order (computed once per library frame, not per step)."""
+
+
 def _select(obj: object, idx: torch.Tensor) -> object:
     """Rows ``idx`` of every tensor field of a frozen dataclass (other fields kept)."""
     changes = {}
@@ -89,6 +95,9 @@ class SimState:
     site_pos: torch.Tensor  # (N, S, 3)
     site_quat: torch.Tensor  # (N, S, 4)
     contact_force: torch.Tensor  # (N, B) normal force magnitude on each body, newtons
+    # (N, B) upward (+Z) component of the net contact force on each body, newtons: what
+    # carries the body's weight (QuestEnvSim's contact rule thresholds it)
+    contact_force_up: torch.Tensor
 
     @property
     def num_envs(self) -> int:
@@ -107,7 +116,9 @@ class ReferenceBatch:
     ``(N, W, D, 7)`` (D devices: headset, left, right; position + wxyz quaternion), with
     ``window_offsets`` the frame offsets of the W entries (0 is now). ``contacts`` are the
     reference contact labels of the character's ``contact`` body group. ``extras`` holds
-    privileged data (full human pose, future frames) keyed by name.
+    privileged data (full human pose, future frames) and the scene contact labels
+    (``SCENE_CONTACTS``: ``(N, G)`` bool, one column per body group of the layout, in
+    ``layout.body_groups`` order) keyed by name.
     """
 
     pose: SimState

@@ -44,7 +44,7 @@ from retarget.motion.clip import MotionClip
 from retarget.motion.library import MotionLibrary
 from retarget.motion.resample import resample
 from retarget.sim import BatchedSim, SimSettings
-from retarget.state import ReferenceBatch, StepContext
+from retarget.state import SCENE_CONTACTS, ReferenceBatch, StepContext
 from retarget.world import build_world
 
 
@@ -190,7 +190,10 @@ class RetargetEnv:
             devices=devices,
             window_offsets=self.window_offsets,
             contacts=lib.contacts[rows],
-            extras={FUTURE_POS: self.reference.arrays["body_pos"][future]},
+            extras={
+                FUTURE_POS: self.reference.arrays["body_pos"][future],
+                SCENE_CONTACTS: self.reference.scene_contacts[rows],
+            },
         )
         return StepContext(
             layout=self.layout,

@@ -1,8 +1,9 @@
 """The kinematic reference of one character over a motion library, precomputed once.
 
 Every library frame gets the kinematically retargeted character pose (``qpos``), its
-velocities (finite differences at the control rate) and the world poses of the bodies and role
-sites (MuJoCo forward kinematics). At run time a step's reference is pure indexing into these
+velocities (finite differences at the control rate), the world poses of the bodies and role
+sites (MuJoCo forward kinematics) and its scene contact labels per body group
+(:mod:`retarget.env.scene_contacts`). At run time a step's reference is pure indexing into these
 flat arrays with the library's ``(N,)`` row indices: no kinematics and no loops per step.
 """
 
@@ -14,6 +15,7 @@ import mujoco
 import numpy as np
 import torch
 
+from retarget.env.scene_contacts import DEFAULT_MARGIN, scene_contact_labels
 from retarget.errors import PluginError
 from retarget.kinds import Character
 from retarget.kinematic import retarget_clip
@@ -43,6 +45,7 @@ class CharacterReference:
         model: mujoco.MjModel,
         layout: Layout,
         clips: Sequence[MotionClip],
+        contact_margin: float = DEFAULT_MARGIN,
     ) -> None:
         joint_map = character.joint_map()
         if joint_map is None:
@@ -86,6 +89,10 @@ class CharacterReference:
             for k, s in enumerate(sites):
                 mujoco.mju_mat2Quat(arrays["site_quat"][f, k], data.site_xmat[s])
         ang, lin = body_velocities(cvel, arrays["body_pos"], com)
+        # which body groups touch the (un-randomized) scene, per frame: the contact reward's
+        # and the evaluation's labels
+        labels = scene_contact_labels(model, layout, qpos, contact_margin)
+        self.scene_contacts = torch.as_tensor(labels, dtype=torch.bool)
         # the character's block only: joints of articulated scene props follow it and keep
         # their defaults at resets
         qpos, qvel = qpos[:, : layout.nq], qvel[:, : layout.nv]
@@ -114,4 +121,5 @@ class CharacterReference:
             site_pos=a["site_pos"][rows],
             site_quat=a["site_quat"][rows],
             contact_force=torch.zeros(rows.shape[0], a["body_pos"].shape[1]),
+            contact_force_up=torch.zeros(rows.shape[0], a["body_pos"].shape[1]),
         )

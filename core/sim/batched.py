@@ -121,6 +121,7 @@ class BatchedSim:
             "site_pos": np.zeros((n, s, 3), f32),
             "site_quat": np.zeros((n, s, 4), f32),
             "contact_force": np.zeros((n, b), f32),
+            "contact_force_up": np.zeros((n, b), f32),
         }
         self.state = SimState(**{k: torch.from_numpy(v) for k, v in self._buf.items()})
         self.bad_count = 0
@@ -220,7 +221,9 @@ class BatchedSim:
         sites = np.ix_(np.arange(self.num_envs)[rows], self._sites)
         buf["site_pos"][rows] = self._site_xpos[sites]
         buf["site_quat"][rows] = self._site_xquat[sites]
-        buf["contact_force"][rows] = np.linalg.norm(self._cfrc[sel][..., 3:], axis=-1)
+        force = self._cfrc[sel][..., 3:]  # world-frame force part of cfrc_ext
+        buf["contact_force"][rows] = np.linalg.norm(force, axis=-1)
+        buf["contact_force_up"][rows] = force[..., 2]
 
     STATE_FIELDS = (
         "qpos",

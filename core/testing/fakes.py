@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from retarget.kinds import Character, Scene
-from retarget.state import Layout, ReferenceBatch, SimState, StepContext
+from retarget.state import SCENE_CONTACTS, Layout, ReferenceBatch, SimState, StepContext
 from retarget.world import World, add_floor, build_world
 
 _CAPSULE = mujoco.mjtGeom.mjGEOM_CAPSULE
@@ -105,7 +105,17 @@ class TinyCharacter(Character):
         }
 
     def body_groups(self) -> Mapping[str, Sequence[str]]:
-        return {"feet": ["left_leg", "right_leg"], "upper_body": ["torso", "left_arm", "right_arm"]}
+        return {
+            "feet": ["left_leg", "right_leg"],
+            "upper_body": ["torso", "left_arm", "right_arm"],
+            # the contact reward's groups (QuestEnvSim: feet, hands, pelvis and spine)
+            "left_foot": ["left_leg"],
+            "right_foot": ["right_leg"],
+            "left_hand": ["left_arm"],
+            "right_hand": ["right_arm"],
+            "pelvis": ["pelvis"],
+            "spine": ["torso"],
+        }
 
     def passive_joints(self) -> Sequence[str]:
         return ("tail_swing",)
@@ -161,6 +171,7 @@ def _fake_state(layout: Layout, n: int, g: torch.Generator) -> SimState:
         site_pos=torch.randn(n, s, 3, generator=g) * 0.5 + torch.tensor([0.0, 0.0, 1.0]),
         site_quat=_unit_quat((n, s), g),
         contact_force=torch.rand(n, b, generator=g) * 200.0,
+        contact_force_up=torch.rand(n, b, generator=g) * 200.0 - 50.0,
     )
 
 
@@ -193,6 +204,7 @@ def fake_context(
         devices=devices,
         window_offsets=window_offsets,
         contacts=torch.rand(num_envs, feet, generator=g) > 0.5,
+        extras={SCENE_CONTACTS: torch.rand(num_envs, len(layout.body_groups), generator=g) > 0.5},
     )
     return StepContext(
         layout=layout,

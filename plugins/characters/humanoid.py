@@ -160,6 +160,11 @@ def humanoid_groups(toes: bool = True) -> dict[str, tuple[str, ...]]:
         "left_foot": ("l_foot", *(("l_toes",) if toes else ())),
         "right_foot": ("r_foot", *(("r_toes",) if toes else ())),
         "hands": ("l_hand", "r_hand"),
+        # the contact reward's links (QuestEnvSim Sec. 3.3.2: feet, hands, pelvis, spine)
+        "left_hand": ("l_hand",),
+        "right_hand": ("r_hand",),
+        "pelvis": ("pelvis",),
+        "spine": ("abdomen", "chest"),
         "upper_body": ("pelvis", "abdomen", "chest", "head", "l_upper_arm", "r_upper_arm"),
         "lower_body": ("l_thigh", "r_thigh", "l_shin", "r_shin", *feet),
         "end_effectors": ("head", "l_hand", "r_hand", "l_foot", "r_foot"),

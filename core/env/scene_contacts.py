@@ -1,0 +1,73 @@
+"""Reference scene contact labels: which body groups of the kinematic reference touch the scene.
+
+QuestEnvSim (Sec. 3.3.2) labels contacts "by using the simulator's collision detection
+algorithm on the mocap reference motions". Here every library frame's retargeted pose is put
+into the environment's own compiled world (character, scene props, floor) and MuJoCo's
+collision detection (``mj_collision``) runs with a ``margin`` on the character's geoms: a geom
+within ``margin`` of a geom that is not the character's counts as touching it, since kinematic
+retargeting leaves feet and seats a few millimetres to centimetres apart or overlapping. A body
+group is in contact when any of its bodies is. This runs once, when the reference is built,
+never per step.
+
+Randomization: the labels are computed against the scene at its default (un-randomized)
+placement, the mocap bodies' poses in the model. Per-episode placement noise is at most 8 cm
+and 0.1 rad (Sec. 3.4), small enough that a contact of the reference stays the contact the
+policy should make; the paper keeps its labels fixed under randomization too.
+"""
+
+from __future__ import annotations
+
+import copy
+
+import mujoco
+import numpy as np
+
+from retarget.state import Layout
+
+DEFAULT_MARGIN = 0.03
+"""Metres within which a reference geom counts as touching the scene."""
+
+
+def group_matrix(model: mujoco.MjModel, layout: Layout) -> np.ndarray:
+    """``(nbody, G)`` bool: model body ``b`` belongs to group ``g`` (``layout.body_groups``
+    order); rows of bodies that are not the character's are all false."""
+    groups = list(layout.body_groups.values())
+    member = np.zeros((model.nbody, len(groups)), dtype=bool)
+    for g, idx in enumerate(groups):
+        for i in idx:
+            member[layout.body_ids[i], g] = True
+    return member
+
+
+def scene_contact_labels(
+    model: mujoco.MjModel,
+    layout: Layout,
+    qpos: np.ndarray,
+    margin: float = DEFAULT_MARGIN,
+) -> np.ndarray:
+    """``(T, G)`` bool labels of full-model poses ``qpos`` ``(T, model.nq)``, one column per
+    body group of ``layout`` (see the module doc)."""
+    m = copy.deepcopy(model)  # margins only for labelling, not in the simulated model
+    character = np.zeros(m.nbody, dtype=bool)
+    character[list(layout.body_ids)] = True
+    mine = character[m.geom_bodyid]
+    m.geom_margin[mine] = np.maximum(m.geom_margin[mine], margin)
+    m.geom_gap[mine] = 0.0
+    member = group_matrix(m, layout)
+    data = mujoco.MjData(m)
+    out = np.zeros((len(qpos), member.shape[1]), dtype=bool)
+    for f in range(len(qpos)):  # preprocessing, once per library frame
+        data.qpos[:] = qpos[f]
+        mujoco.mj_kinematics(m, data)
+        mujoco.mj_collision(m, data)
+        if data.ncon == 0:
+            continue
+        con = data.contact
+        geoms = np.asarray(con.geom[: data.ncon]).reshape(-1, 2)
+        close = np.asarray(con.dist[: data.ncon]) < margin
+        bodies = m.geom_bodyid[geoms]  # (ncon, 2)
+        ours = character[bodies]
+        scene = ours ^ ours[:, ::-1]  # exactly one side is the character's
+        hit = close[:, None] & scene & ours
+        out[f] = member[bodies[hit]].any(axis=0)
+    return out
