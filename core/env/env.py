@@ -78,6 +78,8 @@ class RetargetEnv:
         self.options = opts = options or EnvOptions()
         self.num_envs = n = opts.num_envs
         self.character, self.scene = character, scene
+        if scene is not None:
+            scene.fit_motion(clips)  # props placed from the motions come before the build
         self.world = build_world(character, scene)
         self.layout = layout = self.world.layout
         hz = opts.sim.control_hz

@@ -11,7 +11,11 @@ import torch
 from retarget.kinds.base import Plugin
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     import mujoco
+
+    from retarget.motion.clip import MotionClip
 
 
 class Scene(Plugin):
@@ -50,6 +54,10 @@ class Scene(Plugin):
         are, so rows differ only by placement.
         """
         ...
+
+    def fit_motion(self, clips: Sequence[MotionClip]) -> None:
+        """Adapt the scene to the run's motion clips before it is built (most scenes ignore
+        this; ``motion_props`` places seats and boxes where the motions need them)."""
 
     def allocate(self, num_envs: int) -> None:
         """Size the per-environment placement state (static scenes ignore this)."""
