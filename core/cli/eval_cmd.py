@@ -27,6 +27,9 @@ COLUMNS = (
     ("jerk_km_s3", "jerk km/s3", "{:.2f}"),
     ("foot_skate_mm", "skate mm", "{:.1f}"),
     ("contact_agreement", "contact", "{:.2f}"),
+    ("scene_contact_agreement", "scene contact", "{:.2f}"),
+    ("penetration_mean_mm", "pen mean mm", "{:.1f}"),
+    ("penetration_max_mm", "pen max mm", "{:.1f}"),
     ("falls_per_min", "falls/min", "{:.1f}"),
     ("runs", "runs", "{}"),
 )

@@ -27,6 +27,12 @@ from retarget.state import Layout
 DEFAULT_MARGIN = 0.03
 """Metres within which a reference geom counts as touching the scene."""
 
+CONTACT_LINKS = ("left_foot", "right_foot", "left_hand", "right_hand", "pelvis", "spine")
+"""The body groups of QuestEnvSim's contact state (Sec. 3.3.2: feet, hands, pelvis, spine)."""
+
+CONTACT_NEWTONS = 50.0
+"""Upward contact force above which a simulated link counts as in contact (Sec. 3.3.2)."""
+
 
 def group_matrix(model: mujoco.MjModel, layout: Layout) -> np.ndarray:
     """``(nbody, G)`` bool: model body ``b`` belongs to group ``g`` (``layout.body_groups``

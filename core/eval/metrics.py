@@ -6,6 +6,13 @@ QuestEnvSim failure rule (mean headset/controller error above 0.8 m) stops count
 jerk for that run; the SimXR rule (head farther than 0.5 m from the headset at any frame) is
 tracked separately. Joint errors (MPJPE family) use the character's ``common_joints`` body
 group when it has one (the 11 joints SimXR reports).
+
+Scene interaction: ``scene_contact_agree`` is the fraction of QuestEnvSim's contact links
+(feet, hands, pelvis, spine: those body groups the character has) whose simulated contact
+state (upward contact force above 50 N, the ``contact`` reward's rule) equals the reference's
+scene label; ``penetration_max``/``penetration_mean`` are the deepest and mean overlap of the
+character's geoms into scene geoms (floor included) among MuJoCo's contacts (``dist < 0``),
+given by the runner from :meth:`BatchedSim.penetration`.
 """
 
 from __future__ import annotations
@@ -14,8 +21,10 @@ from dataclasses import dataclass
 
 import torch
 
+from retarget.env.scene_contacts import CONTACT_LINKS
+from retarget.env.scene_contacts import CONTACT_NEWTONS as LINK_NEWTONS
 from retarget.heading import rotation_distance
-from retarget.state import Layout, StepContext
+from retarget.state import SCENE_CONTACTS, Layout, StepContext
 
 CONTACT_NEWTONS = 1.0
 
@@ -51,6 +60,9 @@ class StepMetrics:
     pa_mpjpe: torch.Tensor | None = None
     mpjre: torch.Tensor | None = None
     mpjve: torch.Tensor | None = None
+    scene_contact_agree: torch.Tensor | None = None
+    penetration_max: torch.Tensor | None = None  # metres, deepest overlap this step
+    penetration_mean: torch.Tensor | None = None  # metres, mean over overlapping contacts
 
 
 class MetricProbe:
@@ -67,8 +79,19 @@ class MetricProbe:
         self.feet = torch.tensor(groups["feet"])
         joints = groups.get("common_joints")
         self.joints = torch.tensor(joints) if joints else None
+        links = [g for g in CONTACT_LINKS if g in groups]
+        names = list(groups)
+        self.link_columns = torch.tensor([names.index(g) for g in links], dtype=torch.long)
+        bodies = sorted({i for g in links for i in groups[g]})
+        member = torch.zeros(len(bodies), len(links))
+        for j, g in enumerate(links):
+            for i in groups[g]:
+                member[bodies.index(i), j] = 1.0
+        self.link_bodies, self.link_member = torch.tensor(bodies, dtype=torch.long), member
 
-    def __call__(self, ctx: StepContext) -> StepMetrics:
+    def __call__(
+        self, ctx: StepContext, penetration: tuple[torch.Tensor, torch.Tensor] | None = None
+    ) -> StepMetrics:
         s, r = ctx.sim, ctx.ref.pose
         hmd = (s.site_pos[:, self.head] - r.site_pos[:, self.head]).norm(dim=-1)
         hmd_rot = rotation_distance(r.site_quat[:, self.head], s.site_quat[:, self.head])
@@ -88,6 +111,14 @@ class MetricProbe:
         speed = s.body_linvel[:, self.feet, :2].norm(dim=-1) * ctx.dt
         skate = (speed * feet_down).sum(-1) / feet_down.sum(-1).clamp_min(1)
         out = StepMetrics(hmd, hmd_rot, ctrl.mean(-1), device_mean, head_gap, agree, skate)
+        labels = ctx.ref.extras.get(SCENE_CONTACTS)
+        if labels is not None and self.link_columns.numel():
+            up = s.contact_force_up[:, self.link_bodies] @ self.link_member
+            sim_links = up > LINK_NEWTONS
+            ref_links = labels[:, self.link_columns]
+            out.scene_contact_agree = (sim_links == ref_links).float().mean(-1)
+        if penetration is not None:
+            out.penetration_max, out.penetration_mean = penetration
         if self.joints is not None:
             sj, rj = s.body_pos[:, self.joints], r.body_pos[:, self.joints]
             out.g_mpjpe = (sj - rj).norm(dim=-1).mean(-1)

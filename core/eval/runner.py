@@ -41,6 +41,8 @@ MEAN_KEYS = (
     "mpjve",
     "skate",
     "contact_agree",
+    "scene_contact_agree",
+    "penetration_mean",
 )
 
 
@@ -83,6 +85,7 @@ def evaluate(
         failed_at = torch.full((n,), float(max_steps + 1))
         simxr_fail = torch.zeros(n, dtype=torch.bool)
         jerk_sum = torch.zeros(n)
+        pen_worst = torch.zeros(n)
         down = torch.zeros(n, dtype=torch.bool)
         falls = torch.zeros(n)
         history: list[torch.Tensor] = []
@@ -92,7 +95,8 @@ def evaluate(
             for step in range(int(available.max())):
                 obs, *_ = env.step(policy(obs))
                 ctx = env.last_context
-                m = probe(ctx)
+                deepest, mean = env.sim.penetration()
+                m = probe(ctx, (torch.from_numpy(deepest).float(), torch.from_numpy(mean).float()))
                 alive = step < available
                 ok = alive & (step < failed_at)
                 newly = ok & (m.device_mean > cfg.fail_distance)
@@ -104,6 +108,7 @@ def evaluate(
                     if value is not None:
                         sums[key] += torch.where(ok, torch.nan_to_num(value), 0.0)
                 tracked += ok.float()
+                pen_worst = torch.maximum(pen_worst, torch.where(ok, m.penetration_max, 0.0))
                 if fall is not None:
                     now = fall.check(ctx) & alive
                     falls += (now & ~down).float()
@@ -128,6 +133,7 @@ def evaluate(
         result["success_simxr"] = (~simxr_fail[:k]).numpy()
         result["seconds"] = (avail * dt).numpy()
         result["falls"] = falls[:k].numpy()
+        result["penetration_max"] = pen_worst[:k].numpy()
         for key, value in result.items():
             per_run[key] = np.concatenate([per_run.get(key, np.zeros(0)), value.astype(float)])
     has_joints = probe.joints is not None
@@ -146,6 +152,8 @@ def _aggregate(env, clips, per_run, has_joints, wall, simulated) -> dict:
         "mpjve": 1000,
         "skate": 1000,
         "jerk": 1e-3,
+        "penetration_mean": 1000,
+        "penetration_max": 1000,
     }
     names = {
         "hmd_pos": "headset_cm",
@@ -159,6 +167,9 @@ def _aggregate(env, clips, per_run, has_joints, wall, simulated) -> dict:
         "skate": "foot_skate_mm",
         "jerk": "jerk_km_s3",
         "contact_agree": "contact_agreement",
+        "scene_contact_agree": "scene_contact_agreement",
+        "penetration_mean": "penetration_mean_mm",
+        "penetration_max": "penetration_max_mm",
         "success_20s": "success_20s",
         "success_30s": "success_30s",
         "frames_ok": "success_frame",
@@ -171,7 +182,9 @@ def _aggregate(env, clips, per_run, has_joints, wall, simulated) -> dict:
         for key, label in names.items():
             if key in joint_keys and not has_joints:
                 continue
-            out[label] = float(np.nanmean(per_run[key][mask]) * scale.get(key, 1.0))
+            # the worst overlap of any run; every other metric is a mean over runs
+            reduce = np.nanmax if key == "penetration_max" else np.nanmean
+            out[label] = float(reduce(per_run[key][mask]) * scale.get(key, 1.0))
         out["falls_per_min"] = float(
             per_run["falls"][mask].sum() / per_run["seconds"][mask].sum() * 60
         )

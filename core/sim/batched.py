@@ -109,6 +109,8 @@ class BatchedSim:
         self._bodies = np.asarray(layout.body_ids, dtype=np.intp)
         self._tree_roots = np.asarray(model.body_rootid[self._bodies], dtype=np.intp)
         self._sites = np.asarray(layout.site_ids, dtype=np.intp)
+        self._own_geom = np.isin(model.geom_bodyid, self._bodies)  # the character's geoms
+        self._scratch: mujoco.MjData | None = None
         n, b, s = num_envs, len(self._bodies), len(self._sites)
         f32 = np.float32
         self._buf = {
@@ -246,6 +248,29 @@ class BatchedSim:
                 self.batch.bind(key)[:] = state[key]
         self.batch.forward()
         self.gather()
+
+    def penetration(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per environment ``(N,)``, the deepest and the mean overlap (metres, 0 when none) of
+        the character's geoms into other geoms (scene props and floor) among the contacts of
+        the last physics step. MuJoCo's contact list is per simulation and not batched, so
+        this copies each environment's data out: an evaluation metric, not a training one."""
+        if self._scratch is None:
+            self._scratch = mujoco.MjData(self.model)
+        deepest = np.zeros(self.num_envs)
+        mean = np.zeros(self.num_envs)
+        data = self._scratch
+        for i in range(self.num_envs):  # BatchedSim is where per-environment loops live
+            self.batch.get_data(i, data)
+            n = data.ncon
+            if n == 0:
+                continue
+            con = data.contact
+            own = self._own_geom[np.asarray(con.geom[:n]).reshape(-1, 2)]
+            dist = np.asarray(con.dist[:n])
+            depth = -dist[(own[:, 0] != own[:, 1]) & (dist < 0)]
+            if depth.size:
+                deepest[i], mean[i] = depth.max(), depth.mean()
+        return deepest, mean
 
     def raw(self, field: str) -> np.ndarray:
         """The live ``(N, ...)`` MuJoCo array of ``field`` (tests and backends use this)."""

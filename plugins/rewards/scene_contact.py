@@ -26,15 +26,15 @@ from pydantic import Field
 
 import retarget
 from retarget import Layout, PluginError, RewardConfig, RewardTerm, StepContext, gaussian_kernel
+from retarget.env.scene_contacts import CONTACT_LINKS as LINKS
+from retarget.env.scene_contacts import CONTACT_NEWTONS
 from retarget.state import SCENE_CONTACTS
-
-LINKS = ("left_foot", "right_foot", "left_hand", "right_hand", "pelvis", "spine")
 
 
 class SceneContactConfig(RewardConfig):
     k: float = Field(1.0, gt=0, description="kernel sensitivity k_c on ||c_sim - c_ref||")
     force_threshold: float = Field(
-        50.0, ge=0, description="newtons a link's contact force must exceed (paper: 50)"
+        CONTACT_NEWTONS, ge=0, description="newtons a link's contact force must exceed (paper: 50)"
     )
     measure: Literal["up", "total"] = Field(
         "up", description="threshold the upward component (paper) or the force's magnitude"
