@@ -89,20 +89,25 @@ class PointCloud(Observer):
             self._dirty[env_ids] = True
             self._any_dirty = True
 
-    def _sample(self, scene, rows: int) -> torch.Tensor:
+    def _sample(self, scene, rows: int) -> tuple[torch.Tensor, bool]:
+        """Pool points of ``rows`` environments, and whether they are already in Z-order."""
         rng = np.random.default_rng(self.config.seed)
+        presorted = False
         if hasattr(scene, "place_surface_points"):  # prop scenes: draw once, place per reset
             if self._local is None:
                 self._local = torch.from_numpy(scene.local_surface_points(self.config.pool, rng))
-            pts = scene.place_surface_points(self._local)
+            local = self._local
+            if self._order is not None:  # place the samples in Z-order directly
+                local, presorted = self._local[self._order], True
+            pts = scene.place_surface_points(local.float(), dtype=torch.float32)
         else:
             pts = torch.from_numpy(np.asarray(scene.surface_points(self.config.pool, rng)))
         pts = pts.reshape(-1, self.config.pool, 3).float()
         if pts.shape[0] != rows:  # a static scene: the same points for every environment
             pts = pts[:1].expand(rows, -1, -1)
-        return pts
+        return pts, presorted
 
-    def _chunked(self, pts: torch.Tensor) -> tuple[torch.Tensor, ...]:
+    def _chunked(self, pts: torch.Tensor, presorted: bool = False) -> tuple[torch.Tensor, ...]:
         """Z-ordered, padded points, their pool indices and chunk boxes for rows ``pts``."""
         e, c = pts.shape[:2]
         size = self.config.chunk
@@ -115,7 +120,7 @@ class PointCloud(Observer):
         order = self._order
         rank = torch.full((e, chunks * size), c, dtype=torch.int32)
         rank[:, :c] = order
-        sorted_pts = pts[:, order]
+        sorted_pts = pts if presorted else pts[:, order]
         # padding repeats the last point, so it never widens a box; its rank marks it out
         padded = torch.cat([sorted_pts, sorted_pts[:, -1:].expand(-1, chunks * size - c, -1)], 1)
         boxes = padded.reshape(e, chunks, size, 3)
@@ -125,13 +130,13 @@ class PointCloud(Observer):
         n = ctx.num_envs
         if self._pool is None or self._scene is not ctx.scene or self._pool.shape[0] != n:
             self._order = self._local = None
-            self._pool, self._rank, self._lo, self._hi = self._chunked(self._sample(ctx.scene, n))
+            self._pool, self._rank, self._lo, self._hi = self._chunked(*self._sample(ctx.scene, n))
             self._scene = ctx.scene
             self._dirty = torch.zeros(n, dtype=torch.bool)
             self._any_dirty = False
         elif self._any_dirty:
             ids = self._dirty.nonzero()[:, 0]
-            parts = self._chunked(self._sample(ctx.scene.select(ids), ids.shape[0]))
+            parts = self._chunked(*self._sample(ctx.scene.select(ids), ids.shape[0]))
             for held, new in zip((self._pool, self._rank, self._lo, self._hi), parts, strict=True):
                 held[ids] = new
             self._dirty.zero_()

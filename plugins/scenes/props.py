@@ -366,15 +366,17 @@ class PropScene(Scene):
         local = torch.from_numpy(self.local_surface_points(count, rng))
         return self.place_surface_points(local).numpy()
 
-    def place_surface_points(self, local: torch.Tensor) -> torch.Tensor:
+    def place_surface_points(
+        self, local: torch.Tensor, dtype: torch.dtype = torch.float64
+    ) -> torch.Tensor:
         """Prop-frame samples ``(C, 4)`` (:meth:`local_surface_points`) placed for every
         held environment ``(N, C, 3)``: callers that redraw often sample once and place many
-        times."""
+        times (in ``dtype``; float32 is plenty for observations)."""
         n = self._offsets.shape[0] if self._allocated else 1
-        pose = self.placement(n)
+        pose = self.placement(n).to(dtype)
         if local.shape[0] == 0 or pose.shape[1] == 0:
-            return torch.zeros(n, local.shape[0], 3, dtype=torch.float64)
-        return place_points(local, pose)
+            return torch.zeros(n, local.shape[0], 3, dtype=dtype)
+        return place_points(local.to(dtype), pose)
 
 
 def place_points(local: torch.Tensor, pose: torch.Tensor) -> torch.Tensor:

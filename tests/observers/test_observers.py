@@ -184,14 +184,19 @@ def test_point_cloud_chunk_prefilter_equals_a_full_scan() -> None:
     obs = PointCloud(cfg)
     import numpy as np
 
-    pool = torch.from_numpy(scene.surface_points(cfg.pool, np.random.default_rng(cfg.seed))).float()
-    for _ in range(3):
+    def pool() -> torch.Tensor:
+        return torch.from_numpy(scene.surface_points(cfg.pool, np.random.default_rng(cfg.seed)))
+
+    for step in range(4):
+        if step == 3:  # two environments reset to new placements: their pools are re-placed
+            scene.randomize(torch.tensor([1, 4]), torch.Generator().manual_seed(5))
+            obs.reset(torch.tensor([1, 4]))
         root = torch.rand(n, 2, generator=g) * 4 - 2
         yaw = torch.rand(n, generator=g) * 6
         ctx = _ctx(scene, root, yaw, z=0.6)
         got = obs.observe(ctx)
         root3 = torch.cat([root, torch.full((n, 1), 0.6)], 1)
-        want = _full_scan(pool, root3, yaw, cfg.count, cfg.radius)
+        want = _full_scan(pool().float(), root3, yaw, cfg.count, cfg.radius)
         assert got[..., 3].sum() > 100  # the draw reaches props
         assert torch.equal(got[..., 3], want[..., 3])
         assert torch.allclose(got, want, atol=1e-5)
