@@ -97,3 +97,25 @@ def test_sidecar_and_recipe_field_win_over_fitting(tmp_path) -> None:
     (tmp_path / "sit.scene.yaml").write_text("props:\n  - {kind: seat, position: [1.0, 2.0]}\n")
     with pytest.raises(PluginError, match=r"sit\.scene\.yaml.*props\.0\.height|height"):
         MotionProps().fit_motion([clip])
+
+
+def test_recipe_with_motion_props_and_the_contact_reward(tmp_path) -> None:
+    """A recipe names the scene and the reward; the sitting clip gets its fitted seat, and a
+    step's contact reward is computed against its labels."""
+    from retarget.env.build import env_from_recipe
+    from retarget.loader import load_plugins
+    from retarget.recipe import load
+
+    recipe = tmp_path / "sit.yaml"
+    recipe.write_text(
+        "character: human\n"
+        "scene: {type: motion_props, randomize: {position: 0.05, yaw: 0.05}}\n"
+        "rewards:\n  contact: {weight: 1.0, k: 1.0}\n"
+    )
+    resolved = load(recipe, load_plugins(strict=True))
+    env = env_from_recipe(resolved, num_envs=2, threads=1, clips=[SIT])
+    assert [s.kind for s in env.scene.fitted] == ["seat"]
+    env.reset()
+    _, reward, *_ = env.step(torch.zeros(2, env.action_dim))
+    assert torch.isfinite(reward).all()
+    assert "contact" in env.rewards.terms
