@@ -228,6 +228,8 @@ class RetargetEnv:
         qpos[:, 2] += self.options.reset_lift
         mocap = None
         if self.scene is not None:  # a new episode gets new prop placements (Sec. 3.4)
+            seconds = frame.double() * self.options.sim.control_dt
+            self.scene.start_episodes(env_ids, clip, seconds)
             self.scene.randomize(env_ids, self.generator)
             if self._mocap_ids.size:
                 pos, quat = self.scene.mocap_poses(env_ids)

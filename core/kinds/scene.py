@@ -62,6 +62,14 @@ class Scene(Plugin):
     def allocate(self, num_envs: int) -> None:
         """Size the per-environment placement state (static scenes ignore this)."""
 
+    def start_episodes(
+        self, env_ids: torch.Tensor, clip: torch.Tensor, seconds: torch.Tensor
+    ) -> None:
+        """Which clip (index into the clips of :meth:`fit_motion`) and time in it (seconds)
+        each environment of ``env_ids`` starts its new episode at; called on every reset just
+        before :meth:`randomize`, so scenes laid out along the reference motion (``path_boxes``)
+        can place props where that episode's motion goes. Most scenes ignore this."""
+
     def randomize(self, env_ids: torch.Tensor, generator: torch.Generator) -> None:
         """Re-draw per-episode placement noise for ``env_ids`` (static scenes ignore this)."""
 
