@@ -31,6 +31,8 @@ COLUMNS = (
     ("penetration_mean_mm", "pen mean mm", "{:.1f}"),
     ("penetration_max_mm", "pen max mm", "{:.1f}"),
     ("falls_per_min", "falls/min", "{:.1f}"),
+    ("box_side_per_min", "box side/min", "{:.1f}"),
+    ("box_top_per_min", "box top/min", "{:.1f}"),
     ("runs", "runs", "{}"),
 )
 

@@ -12,7 +12,9 @@ Scene interaction: ``scene_contact_agree`` is the fraction of QuestEnvSim's cont
 state (upward contact force above 50 N, the ``contact`` reward's rule) equals the reference's
 scene label; ``penetration_max``/``penetration_mean`` are the deepest and mean overlap of the
 character's geoms into scene geoms (floor included) among MuJoCo's contacts (``dist < 0``),
-given by the runner from :meth:`BatchedSim.penetration`.
+given by the runner from :meth:`BatchedSim.penetration`. Feet hitting props (box tops and
+sides, the boxes-on-a-path check) come from MuJoCo's contact list too, in
+:mod:`retarget.eval.prop_hits`, counted by the runner.
 """
 
 from __future__ import annotations

@@ -4,6 +4,11 @@ As in QuestEnvSim, every clip is evaluated from many starting frames (every ``ev
 each run lasting until its clip ends or ``max_seconds``. Runs are batched over the env's
 environments. Terminations other than the clip end are off: a run is followed through a
 failure, and the failure rules below decide what counts.
+
+Feet hitting props (:mod:`retarget.eval.prop_hits`) are counted over every step of a run, like
+falls (they are physical events, not tracking errors): the share of steps with a foot on a
+prop's top or against its side, and per minute the hits that begin (a side hit held for five
+steps is one stumble). They are reported only for scenes with props.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ import torch
 
 from retarget.env import RetargetEnv
 from retarget.eval.metrics import MetricProbe
+from retarget.eval.prop_hits import foot_geoms, foot_prop_hits, prop_geoms
 from retarget.kinds import Termination
 
 Policy = Callable[[Mapping[str, torch.Tensor]], torch.Tensor]
@@ -72,6 +78,9 @@ def evaluate(
     runs = len(clips)
     max_steps = round(cfg.max_seconds / dt)
     per_run: dict[str, np.ndarray] = {}
+    model = env.world.model
+    props = prop_geoms(model)
+    feet = foot_geoms(model, env.layout) if props.any() else props
     wall, simulated = 0.0, 0.0
     for begin in range(0, runs, env.num_envs):
         idx = np.arange(begin, min(begin + env.num_envs, runs))
@@ -89,6 +98,9 @@ def evaluate(
         down = torch.zeros(n, dtype=torch.bool)
         falls = torch.zeros(n)
         history: list[torch.Tensor] = []
+        hit_steps = {side: torch.zeros(n) for side in ("top", "side")}
+        hit_events = {side: torch.zeros(n) for side in ("top", "side")}
+        hit_before = {side: torch.zeros(n, dtype=torch.bool) for side in ("top", "side")}
         obs = env.place(c, f)
         t0 = time.perf_counter()
         with torch.no_grad():
@@ -113,6 +125,13 @@ def evaluate(
                     now = fall.check(ctx) & alive
                     falls += (now & ~down).float()
                     down = now
+                if props.any():
+                    found = env.sim.each_env(lambda d: foot_prop_hits(model, d, feet, props))
+                    for j, side in enumerate(("top", "side")):
+                        now = torch.tensor([h[j] for h in found]) & alive
+                        hit_steps[side] += now.float()
+                        hit_events[side] += (now & ~hit_before[side]).float()
+                        hit_before[side] = now
                 history = [*history[-3:], ctx.sim.body_pos.clone()]
                 if len(history) == 4:
                     d3 = history[3] - 3 * history[2] + 3 * history[1] - history[0]
@@ -134,6 +153,11 @@ def evaluate(
         result["seconds"] = (avail * dt).numpy()
         result["falls"] = falls[:k].numpy()
         result["penetration_max"] = pen_worst[:k].numpy()
+        if props.any():
+            result["steps"] = avail.numpy()
+            for side in ("top", "side"):
+                result[f"box_{side}_steps"] = hit_steps[side][:k].numpy()
+                result[f"box_{side}_events"] = hit_events[side][:k].numpy()
         for key, value in result.items():
             per_run[key] = np.concatenate([per_run.get(key, np.zeros(0)), value.astype(float)])
     has_joints = probe.joints is not None
@@ -188,6 +212,12 @@ def _aggregate(env, clips, per_run, has_joints, wall, simulated) -> dict:
         out["falls_per_min"] = float(
             per_run["falls"][mask].sum() / per_run["seconds"][mask].sum() * 60
         )
+        if "steps" in per_run:  # pooled over runs: every step and second weighs the same
+            steps, minutes = per_run["steps"][mask].sum(), per_run["seconds"][mask].sum() / 60
+            for side in ("top", "side"):
+                hits, events = per_run[f"box_{side}_steps"], per_run[f"box_{side}_events"]
+                out[f"box_{side}_fraction"] = float(hits[mask].sum() / max(steps, 1))
+                out[f"box_{side}_per_min"] = float(events[mask].sum() / max(minutes, 1e-9))
         out["runs"] = int(mask.sum())
         return out
 

@@ -12,7 +12,9 @@ A backend for another engine (e.g. a GPU one) implements the same four things: `
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeVar
 
 import mujoco
 import numpy as np
@@ -20,6 +22,8 @@ import torch
 from mujoco.batch import Batch
 
 from retarget.state import Layout, SimState
+
+T = TypeVar("T")
 
 HUGE_VELOCITY = 1e4
 """|qvel| above this (rad/s or m/s) counts as a blown-up simulation, like MuJoCo's own check."""
@@ -271,6 +275,19 @@ class BatchedSim:
             if depth.size:
                 deepest[i], mean[i] = depth.max(), depth.mean()
         return deepest, mean
+
+    def each_env(self, fn: Callable[[mujoco.MjData], T]) -> list[T]:
+        """``fn`` of every environment's full ``MjData`` (contacts included), in order: for
+        evaluation metrics that need MuJoCo's per-simulation contact list, which is not
+        batched. Each environment is copied into one scratch ``MjData``, so ``fn`` must not
+        keep it."""
+        if self._scratch is None:
+            self._scratch = mujoco.MjData(self.model)
+        out = []
+        for i in range(self.num_envs):  # BatchedSim is where per-environment loops live
+            self.batch.get_data(i, self._scratch)
+            out.append(fn(self._scratch))
+        return out
 
     def raw(self, field: str) -> np.ndarray:
         """The live ``(N, ...)`` MuJoCo array of ``field`` (tests and backends use this)."""
