@@ -18,6 +18,17 @@ GHOST = (0.2, 0.45, 0.95, 0.55)
 DEVICE = (1.0, 0.85, 0.1, 1.0)
 
 
+def copy_env_pose(env: RetargetEnv, index: int, data: mujoco.MjData) -> None:
+    """Pose ``data`` as environment ``index`` is: every joint (character and scene props)
+    and the mocap bodies, which hold that environment's own prop placement (the model's
+    mocap poses are only the default placement: boxes on a path are parked far away there);
+    then forward kinematics for drawing."""
+    data.qpos[:] = env.sim.raw("qpos")[index]
+    data.mocap_pos[:] = env.sim.raw("mocap_pos")[index]
+    data.mocap_quat[:] = env.sim.raw("mocap_quat")[index]
+    mujoco.mj_kinematics(env.world.model, data)
+
+
 def render_rollout(
     env: RetargetEnv,
     policy: Callable[[Mapping[str, torch.Tensor]], torch.Tensor],
@@ -51,8 +62,7 @@ def render_rollout(
         for _ in range(max(steps, 1)):
             obs, *_ = env.step(policy(obs))
             row = int(lib.rows(env.clip[:1], env.frame[:1])[0, 0])
-            data.qpos[:] = env.sim.raw("qpos")[0]
-            mujoco.mj_kinematics(model, data)
+            copy_env_pose(env, 0, data)
             cam.lookat[:] = [data.qpos[0], data.qpos[1], 0.9]
             render.renderer.update_scene(data, camera=cam)
             scene = render.renderer.scene
