@@ -2,9 +2,15 @@
 
 from __future__ import annotations
 
+import os
+import sys
+
 from rich.console import Console
 
-out = Console(highlight=False, soft_wrap=True)
+# Piped or redirected output (logs, CI) gets no terminal width: rich would squeeze the wide
+# metric tables into 80 columns of ellipses. Such output is read in files, so give it room.
+_WIDTH = None if sys.stdout.isatty() or "COLUMNS" in os.environ else 240
+out = Console(highlight=False, soft_wrap=True, width=_WIDTH)
 err = Console(stderr=True, highlight=False, soft_wrap=True)
 
 
