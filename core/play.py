@@ -58,6 +58,11 @@ def render_rollout(
     cam.distance, cam.elevation, cam.azimuth = 4.0, -15.0, 135.0
     shift = np.array([0.0, ghost_offset, 0.0])
     frames = []
+    # the training world has only MuJoCo's default headlight, which renders dim: light the
+    # video like `character show` does (visual settings only; physics reads none of them)
+    model.vis.headlight.ambient[:] = [0.45, 0.45, 0.45]
+    model.vis.headlight.diffuse[:] = [0.6, 0.6, 0.6]
+    model.vis.headlight.specular[:] = [0.1, 0.1, 0.1]
     with FrameRenderer(model, width, height) as render, torch.no_grad():
         for _ in range(max(steps, 1)):
             obs, *_ = env.step(policy(obs))
