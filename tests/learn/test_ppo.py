@@ -6,6 +6,7 @@ import math
 
 import pytest
 import torch
+from helpers import assert_state_equal
 
 from retarget.checkpoint import load_checkpoint, save_checkpoint
 from retarget.learn import PPOConfig, PPOLearner, torch_threads
@@ -30,21 +31,6 @@ def learner(
     return PPOLearner(
         cfg, env.obs_dims, env.action_dim, env.num_envs, torch.Generator().manual_seed(seed)
     )
-
-
-def assert_state_equal(a, b, where: str = "state") -> None:
-    if isinstance(a, torch.Tensor):
-        assert torch.equal(a, b), where
-    elif isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        for key in a:
-            assert_state_equal(a[key], b[key], f"{where}.{key}")
-    elif isinstance(a, (list, tuple)):
-        assert len(a) == len(b), where
-        for i, (x, y) in enumerate(zip(a, b, strict=True)):
-            assert_state_equal(x, y, f"{where}[{i}]")
-    else:
-        assert a == b, where
 
 
 def test_learns_the_fake_task() -> None:

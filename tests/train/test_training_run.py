@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from helpers import assert_state_equal
 
 from retarget.checkpoint import load_checkpoint
 from retarget.cli.main import main
@@ -72,23 +73,6 @@ def trainer(recipe: Path, root: Path, name: str) -> Trainer:
     return Trainer(resolved, new_run_dir(root, name), checkpoint_every=2, tensorboard=False)
 
 
-def assert_same(a, b, where: str = "state") -> None:
-    if isinstance(a, torch.Tensor):
-        assert torch.equal(a, b), where
-    elif isinstance(a, dict):
-        assert a.keys() == b.keys(), where
-        for key in a:
-            assert_same(a[key], b[key], f"{where}.{key}")
-    elif isinstance(a, (list, tuple)):
-        assert len(a) == len(b), where
-        for i, (x, y) in enumerate(zip(a, b, strict=True)):
-            assert_same(x, y, f"{where}[{i}]")
-    elif hasattr(a, "shape"):  # numpy arrays inside env state
-        assert (a == b).all(), where
-    else:
-        assert a == b, where
-
-
 def test_cli_run_has_finite_losses_checkpoints_and_eval_and_play(
     recipe: Path, tmp_path: Path
 ) -> None:
@@ -143,8 +127,8 @@ def test_resume_continues_bit_for_bit_and_seed_repeats(recipe: Path, tmp_path: P
     resumed.restore(ckpt)
     resumed.train(Budget(steps=4 * SAMPLES))
     assert resumed.progress.iteration == straight.progress.iteration == 4
-    assert_same(resumed.algorithm.state_dict(), straight.algorithm.state_dict(), "algorithm")
-    assert_same(resumed.env.state_dict(), straight.env.state_dict(), "env")
+    assert_state_equal(resumed.algorithm.state_dict(), straight.algorithm.state_dict(), "algorithm")
+    assert_state_equal(resumed.env.state_dict(), straight.env.state_dict(), "env")
     assert [learning_columns(r) for r in rows(resumed.run)] == [
         learning_columns(r) for r in rows(straight.run)[2:]
     ]
