@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from retarget.cli.console import out
-from retarget.deploy import export_onnx
+from retarget.deploy import export_onnx, policy_of
 from retarget.errors import RetargetError
 from retarget.registry import Registry
 from retarget.train.load import load_run
@@ -26,7 +26,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         raise RetargetError("choose a format", hint="retarget export RUN --onnx")
     loaded = load_run(args.run, registry, num_envs=1, checkpoint=args.checkpoint)
     env = loaded.env
-    group, _ = _policy_group(loaded.algorithm)
+    group, _ = policy_of(loaded.algorithm)
     layout = env.layout
     metadata = {
         "run": str(loaded.run),
@@ -48,9 +48,3 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     )
     return 0
 
-
-def _policy_group(algorithm):
-    try:
-        return algorithm.policy()
-    except NotImplementedError as exc:
-        raise RetargetError(str(exc), plugin=algorithm.name) from None

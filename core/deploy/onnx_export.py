@@ -31,14 +31,19 @@ class ExportedPolicy:
     action_dim: int
 
 
+def policy_of(algorithm: Algorithm) -> tuple[str, torch.nn.Module]:
+    """The algorithm's deployable ``(group, module)``; a user error if it has none."""
+    try:
+        return algorithm.policy()
+    except NotImplementedError as exc:
+        raise RetargetError(str(exc), plugin=algorithm.name) from None
+
+
 def export_onnx(
     algorithm: Algorithm, out: Path, metadata: dict[str, Any] | None = None
 ) -> ExportedPolicy:
     """Write ``out`` (ONNX, dynamic batch) and ``out.with_suffix('.json')`` (metadata)."""
-    try:
-        group, module = algorithm.policy()
-    except NotImplementedError as exc:
-        raise RetargetError(str(exc), plugin=algorithm.name) from None
+    group, module = policy_of(algorithm)
     module = module.eval()
     obs_dim = int(metadata["obs_dim"]) if metadata and "obs_dim" in metadata else None
     if obs_dim is None:

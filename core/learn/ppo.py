@@ -48,26 +48,19 @@ def torch_threads(count: int):
 
 
 class DeployedPolicy(nn.Module):
-    """Raw actor observations -> actions in [-1, 1]: what a headset application runs."""
+    """Raw actor observations -> actions in [-1, 1]: what a headset application runs.
+
+    Frozen copies of the actor's normaliser and mean network, so it computes exactly what
+    :meth:`PPOLearner.act` does at export time and later training does not change it.
+    """
 
     def __init__(self, normalizer: RunningNormalizer | None, net: nn.Module) -> None:
         super().__init__()
+        self.norm = copy.deepcopy(normalizer) if normalizer is not None else nn.Identity()
         self.net = copy.deepcopy(net)
-        self.normalize = normalizer is not None
-        self.clip = float(normalizer.clip) if normalizer is not None else 0.0
-        # float32 constants computed as RunningNormalizer.forward does: same arithmetic as act()
-        mean = normalizer.mean.float() if normalizer is not None else None
-        scale = (
-            (normalizer.var + normalizer.eps).rsqrt().float() if normalizer is not None else None
-        )
-        self.register_buffer("mean", mean)
-        self.register_buffer("scale", scale)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
-        x = obs
-        if self.normalize:
-            x = ((x - self.mean) * self.scale).clamp(-self.clip, self.clip)
-        return self.net(x).clamp(-1.0, 1.0)
+        return self.net(self.norm(obs)).clamp(-1.0, 1.0)
 
 
 class PPOLearner:
