@@ -101,7 +101,12 @@ def test_missing_file(tmp_path: Path, registry: Registry) -> None:
 
 @pytest.mark.parametrize(
     ("text", "needle"),
-    [("", "empty"), ("- a\n- b\n", "mapping"), ("character: tiny\nseed: x\n", "seed")],
+    [
+        ("", "empty"),
+        ("- a\n- b\n", "mapping"),
+        ("character: tiny\nseed: x\n", "seed"),
+        ("character: tiny\nsim: {actuation: servo}\n", "sim.actuation"),
+    ],
 )
 def test_other_shapes_of_bad_input(tmp_path: Path, registry: Registry, text, needle) -> None:
     err = error_of(write(tmp_path, text), registry)

@@ -39,6 +39,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         ],
         "actuators": list(layout.actuator_names),
         "torque_limits": [float(t) for t in layout.torque_limits],
+        "actuation": _actuation(env),
     }
     path = Path(args.out) if args.out else loaded.run / "export" / "policy.onnx"
     exported = export_onnx(loaded.algorithm, path, metadata)
@@ -48,3 +49,18 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     )
     return 0
 
+
+def _actuation(env) -> dict:
+    """What an action means, for an engine that replays the policy outside retarget: torque
+    fractions of ``torque_limits``, or PD targets (rad = action * scale) with these gains."""
+    sim = env.options.sim
+    if sim.actuation == "torque":
+        return {"mode": "torque"}
+    model = env.sim.model
+    return {
+        "mode": "pd",
+        "scale": [float(g / -b) for g, b in zip(model.actuator_gainprm[:, 0],
+                                               model.actuator_biasprm[:, 1], strict=True)],
+        "kp": [float(-b) for b in model.actuator_biasprm[:, 1]],
+        "kd": [float(-b) for b in model.actuator_biasprm[:, 2]],
+    }

@@ -47,6 +47,9 @@ def env_from_recipe(
         control_hz=recipe.sim.control_hz,
         substeps=recipe.sim.substeps,
         threads=recipe.sim.threads if threads is None else threads,
+        actuation=recipe.sim.actuation,
+        pd_saturation=recipe.sim.pd_saturation,
+        pd_damping=recipe.sim.pd_damping,
     )
     options = EnvOptions(
         num_envs=recipe.env.num_envs if num_envs is None else num_envs,

@@ -8,7 +8,7 @@ plugin's own ``Config`` in phase 2 (:mod:`retarget.recipe.resolve`).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
@@ -53,6 +53,15 @@ class SimSection(Strict):
     control_hz: float = Field(36.0, gt=0, description="policy rate (the paper uses 36 Hz)")
     substeps: int = Field(10, ge=1, description="physics steps per control step")
     threads: int = Field(0, ge=0, description="physics threads; 0 uses every core")
+    actuation: Literal["torque", "pd"] = Field(
+        "torque",
+        description="torque: actions scale each joint's torque limit (the paper); pd: actions "
+        "are joint-angle targets of torque-limited PD servos (retarget.sim.actuation)",
+    )
+    pd_saturation: float = Field(
+        0.5, gt=0, description="pd: angle error (rad) at which a servo reaches its torque limit"
+    )
+    pd_damping: float = Field(0.1, ge=0, description="pd: kd = pd_damping * kp (seconds)")
 
 
 class EnvSection(Strict):

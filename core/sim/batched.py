@@ -21,6 +21,7 @@ import numpy as np
 import torch
 from mujoco.batch import Batch
 
+from retarget.sim.actuation import Actuation, apply_actuation
 from retarget.state import Layout, SimState
 
 T = TypeVar("T")
@@ -41,6 +42,9 @@ class SimSettings:
     control_hz: float = 36.0
     substeps: int = 10
     threads: int = 0  # 0: all cores
+    actuation: Actuation = "torque"  # or "pd": see retarget.sim.actuation
+    pd_saturation: float = 0.5  # rad of error at which a PD servo reaches its torque limit
+    pd_damping: float = 0.1  # s: kd = pd_damping * kp
 
     @property
     def timestep(self) -> float:
@@ -93,6 +97,12 @@ class BatchedSim:
         self.settings = settings or SimSettings()
         self.model = model
         self.model.opt.timestep = self.settings.timestep
+        apply_actuation(
+            model,
+            self.settings.actuation,
+            saturation=self.settings.pd_saturation,
+            damping=self.settings.pd_damping,
+        )
         self.layout = layout
         self.num_envs = num_envs
         self.batch = Batch(model, num_envs, nthread=self.settings.threads, persistent=True)

@@ -175,7 +175,7 @@ def test_export_onnx_matches_torch(recipe: Path, tmp_path: Path) -> None:
     from retarget.train.load import load_run
 
     assert main(["train", str(recipe), "--steps", str(2 * SAMPLES), "--runs-dir", str(tmp_path),
-                 "--no-tensorboard"]) == 0  # fmt: skip
+                 "--no-tensorboard", "--set", "sim.actuation=pd"]) == 0  # fmt: skip
     run = tmp_path / "tiny" / "latest"
     assert main(["export", str(run), "--onnx"]) == 0
     onnx_path = run / "export" / "policy.onnx"
@@ -184,6 +184,10 @@ def test_export_onnx_matches_torch(recipe: Path, tmp_path: Path) -> None:
     assert meta["obs_dim"] == loaded.env.obs_dims["actor"]
     assert meta["action_dim"] == loaded.env.action_dim == len(meta["torque_limits"])
     assert sum(s["size"] for s in meta["observation_sources"]) == meta["obs_dim"]
+    # what an action means travels with the file: PD gains from the same torque limits
+    assert meta["actuation"]["mode"] == "pd"
+    np.testing.assert_allclose(meta["actuation"]["kp"], np.array(meta["torque_limits"]) / 0.5)
+    np.testing.assert_allclose(meta["actuation"]["kd"], 0.1 * np.array(meta["actuation"]["kp"]))
 
     # real observations of the env (plus far-out ones that hit the normaliser's clip)
     obs = loaded.env.reset()["actor"].float()
