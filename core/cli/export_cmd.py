@@ -59,8 +59,10 @@ def _actuation(env) -> dict:
     model = env.sim.model
     return {
         "mode": "pd",
-        "scale": [float(g / -b) for g, b in zip(model.actuator_gainprm[:, 0],
-                                               model.actuator_biasprm[:, 1], strict=True)],
+        "scale": [
+            float(g / -b)
+            for g, b in zip(model.actuator_gainprm[:, 0], model.actuator_biasprm[:, 1], strict=True)
+        ],
         "kp": [float(-b) for b in model.actuator_biasprm[:, 1]],
         "kd": [float(-b) for b in model.actuator_biasprm[:, 2]],
     }
