@@ -95,3 +95,18 @@ def test_console_script_runs() -> None:
         check=False,
     )
     assert result.returncode == 0 and "retarget" in result.stdout
+
+
+def test_motion_generate_writes_clips_that_read_back(tmp_path, capsys) -> None:
+    import numpy as np
+
+    from retarget.motion.procedural import default_motions
+    from retarget.motion.sources import load_motions
+
+    assert main(["motion", "generate", "--out", str(tmp_path), "--names", "sit_stand"]) == 0
+    (read,) = load_motions(str(tmp_path))
+    (made,) = default_motions(names=("sit_stand",))
+    assert read.num_frames == made.num_frames
+    np.testing.assert_allclose(read.global_pos, made.global_pos, atol=1e-4)
+    assert main(["motion", "generate", "--out", str(tmp_path), "--names", "sitting"]) == 2
+    assert "choose from idle" in capsys.readouterr().err

@@ -38,6 +38,8 @@ class MotionCommand(Command):
     ``retarget motion inspect FILE...`` prints one table row per file;
     ``retarget motion show FILE --out clip.png`` writes a contact sheet of evenly spaced frames
     (``.mp4`` needs the optional ``imageio-ffmpeg`` package).
+    ``retarget motion generate --out DIR [--names sit_stand ...]`` writes the project's generated
+    clips as BVH files, so that a subset (e.g. only sitting) can be given to ``--motions``.
     """
 
     name = "motion"
@@ -56,11 +58,38 @@ class MotionCommand(Command):
         show.add_argument("--end", type=float, default=None, help="last second to show")
         show.add_argument("--view", choices=("side", "front"), default="side",
                           help="camera beside the direction of travel, or in front")
+        gen = sub.add_parser("generate", help="write the generated default clips as BVH")
+        gen.add_argument("--out", required=True, help="directory for NAME.bvh files")
+        gen.add_argument("--names", nargs="+", default=None,
+                         help="clips to write (default: all of them)")
+        gen.add_argument("--height", type=float, default=None, help="subject height, m")
 
     def run(self, args: argparse.Namespace) -> int:
         if args.motion_action == "inspect":
             return self._inspect(args)
+        if args.motion_action == "generate":
+            return self._generate(args)
         return self._show(args)
+
+    def _generate(self, args: argparse.Namespace) -> int:
+        from retarget.motion import skeleton as sk
+        from retarget.motion.bvh_write import write_bvh
+        from retarget.motion.procedural import GENERATORS, default_motions
+
+        names = tuple(args.names) if args.names else None
+        unknown = [n for n in names or () if n not in GENERATORS]
+        if unknown:
+            raise RetargetError(
+                f"unknown generated motion(s) {', '.join(unknown)}",
+                hint=f"choose from {', '.join(GENERATORS)}",
+            )
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        clips = default_motions(args.height or sk.REFERENCE_HEIGHT, names=names)
+        for clip in clips:
+            path = write_bvh(clip, out / f"{clip.name}.bvh")
+            print(f"wrote {path} ({clip.num_frames} frames, {clip.duration:.1f} s)")
+        return 0
 
     def _inspect(self, args: argparse.Namespace) -> int:
         from rich.console import Console

@@ -26,7 +26,12 @@ DEVICES = ("headset", "left", "right")
 
 
 class HmdConfig(PluginConfig):
-    past: int = Field(0, ge=0, description="past frames before the current one")
+    past: int = Field(
+        1,
+        ge=0,
+        description="past frames before the current one; the paper's Eq. 2 gives two "
+        "consecutive readings (past 1) so that the policy can infer the user's velocity",
+    )
     future: int = Field(0, ge=0, description="future frames after the current one (offline only)")
     keep_height: bool = Field(
         True, description="positions keep world height; false makes them relative to the root"

@@ -40,9 +40,12 @@ def _at_origin(ctx):
 
 
 def test_sizes() -> None:
-    assert Hmd().spec(LAYOUT).shape == (9,)
-    assert ThreePoint().spec(LAYOUT).shape == (27,)
-    assert ThreePoint(ThreePoint.Config(controller_rotation=False)).spec(LAYOUT).shape == (15,)
+    # defaults: the previous and the current reading (paper Eq. 2)
+    assert Hmd().spec(LAYOUT).shape == (2 * 9,)
+    assert ThreePoint().spec(LAYOUT).shape == (2 * 27,)
+    assert ThreePoint(ThreePoint.Config(past=0)).spec(LAYOUT).shape == (27,)
+    no_rotation = ThreePoint.Config(past=0, controller_rotation=False)
+    assert ThreePoint(no_rotation).spec(LAYOUT).shape == (15,)
     assert ThreePoint(ThreePoint.Config(past=2, future=1)).spec(LAYOUT).shape == (4 * 27,)
 
 
@@ -53,13 +56,16 @@ def test_values_in_world_aligned_frame() -> None:
     frames = dev[:, 1:4]  # offsets -1, 0, 1
     torch.testing.assert_close(out[..., :3], frames[..., :3])
     torch.testing.assert_close(out[..., 3:], quat_to_6d(frames[..., 3:]))
-    pos_only = _observe(ThreePoint(ThreePoint.Config(controller_rotation=False)), ctx)
+    pos_only = _observe(ThreePoint(ThreePoint.Config(past=0, controller_rotation=False)), ctx)
     now = dev[:, 2]
     expected = torch.cat(
         [now[:, 0, :3], quat_to_6d(now[:, 0, 3:]), now[:, 1, :3], now[:, 2, :3]], 1
     )
     torch.testing.assert_close(pos_only, expected)
-    torch.testing.assert_close(_observe(Hmd(), ctx), expected[:, :9])
+    torch.testing.assert_close(_observe(Hmd(Hmd.Config(past=0)), ctx), expected[:, :9])
+    two = _observe(Hmd(), ctx)  # default: previous reading, then the current one
+    torch.testing.assert_close(two[:, 9:], expected[:, :9])
+    torch.testing.assert_close(two[:, :3], dev[:, 1, 0, :3])
 
 
 def test_values_follow_the_root_heading() -> None:
@@ -70,7 +76,7 @@ def test_values_follow_the_root_heading() -> None:
     ctx = replace(ctx, sim=replace(ctx.sim, qpos=qpos))
     hmd = ctx.ref.devices[:, 2, 0]
     x, y, z = hmd[:, 0] - 3.0, hmd[:, 1] + 1.0, hmd[:, 2]
-    out = _observe(Hmd(), ctx)
+    out = _observe(Hmd(Hmd.Config(past=0)), ctx)
     torch.testing.assert_close(out[:, :3], torch.stack([y, -x, z], dim=-1))
 
 
