@@ -9,7 +9,9 @@ Run (by hand; one hour per character on a 2-core machine)::
         runs/learning/dino-hmd/latest --png curves.png   # curves of finished runs side by side
 
 Extra ``--set k=v`` pairs go to ``retarget train`` (e.g. ``--set sim.threads=1`` when two
-runs share the machine). Needs the ``bench`` extra (matplotlib) for the PNG.
+runs share the machine, ``--set sim.actuation=pd`` for PD-target actions, which learn faster
+at this budget: ``benchmarks/results/learning_2026-11-29.md``). Needs the ``bench`` extra
+(matplotlib) for the PNG.
 
 Split of ``../shared/data/mocap`` (or ``$RETARGET_SHARED_DATA``): training = the five Bandai
 walks (straight, slow, brisk, left and right turn) and CMU 131_02; held out = CMU 131_01 (a
@@ -103,6 +105,28 @@ def plot(runs: list[Path], png: Path) -> None:
     print(f"wrote {png}")
 
 
+def compare(runs: list[Path], marks: list[float]) -> str:
+    """Markdown table: mean episode length / return of each run around equal environment
+    steps (the rows logged in the last 100k steps before each mark), so that runs that shared
+    the machine differently are compared by samples, not by minutes."""
+    head = "| run | " + " | ".join(f"{m:g} M" for m in marks) + " |"
+    lines = [head, "|---|" + "---|" * len(marks)]
+    for run in runs:
+        rows = read_metrics(run)
+        cells = []
+        for m in marks:
+            near = [r for r in rows if m * 1e6 - 1e5 < r["step"] <= m * 1e6
+                    and "episode_length" in r]  # fmt: skip
+            if near:
+                length = sum(r["episode_length"] for r in near) / len(near)
+                ret = sum(r["episode_return"] for r in near) / len(near)
+                cells.append(f"{length:.1f} / {ret:.0f}")
+            else:
+                cells.append("-")
+        lines.append(f"| {run} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--character", default="human")
@@ -113,8 +137,14 @@ def main() -> None:
     parser.add_argument("--run", help="evaluate and plot this finished run instead of training")
     parser.add_argument("--plot", nargs="+", help="only draw the curves of these runs")
     parser.add_argument("--png", help="curves image (default: OUT/NAME-curves.png)")
+    parser.add_argument("--compare", nargs="+", help="A/B table of these runs at equal steps")
+    parser.add_argument("--marks", type=float, nargs="+", default=[0.5, 1, 2, 3, 4],
+                        help="--compare: millions of environment steps")
     args = parser.parse_args()
     out = Path(args.out)
+    if args.compare:
+        print(compare([Path(p) for p in args.compare], args.marks))
+        return
     if args.plot:
         plot([Path(p) for p in args.plot], Path(args.png or out / "curves.png"))
         return
