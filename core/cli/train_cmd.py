@@ -30,6 +30,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--resume", metavar="RUN", help="continue a run (runs/NAME/latest)")
     parser.add_argument("--runs-dir", default="runs", help="where run directories go")
     parser.add_argument("--num-envs", type=int, help="override env.num_envs")
+    parser.add_argument(
+        "--threads",
+        type=int,
+        help="physics threads (overrides sim.threads; allowed with --resume: each environment "
+        "steps the same whatever the thread count, so only the speed changes)",
+    )
     parser.add_argument("--checkpoint-every", type=int, default=10, help="iterations")
     parser.add_argument("--no-tensorboard", action="store_true", help="CSV logs only")
     parser.set_defaults(handler=run)
@@ -69,6 +75,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         resolved,
         run_dir,
         num_envs=args.num_envs,
+        threads=args.threads,
         checkpoint_every=args.checkpoint_every,
         tensorboard=not args.no_tensorboard,
     )

@@ -68,6 +68,7 @@ class Trainer:
         run: Path,
         *,
         num_envs: int | None = None,
+        threads: int | None = None,
         checkpoint_every: int = 10,
         tensorboard: bool = True,
     ) -> None:
@@ -81,7 +82,7 @@ class Trainer:
         self.resolved, self.run = resolved, run
         self.checkpoint_every = checkpoint_every
         generator = seed_everything(resolved.recipe.seed)
-        self.env = env_from_recipe(resolved, num_envs=num_envs)
+        self.env = env_from_recipe(resolved, num_envs=num_envs, threads=threads)
         algorithm = resolved.component("algorithm").instantiate()
         assert isinstance(algorithm, Algorithm)
         self.algorithm = algorithm

@@ -68,9 +68,11 @@ def learning_columns(row: dict[str, str]) -> dict[str, str]:
     return {k: v for k, v in row.items() if v and not any(t in k for t in TIMING)}
 
 
-def trainer(recipe: Path, root: Path, name: str) -> Trainer:
+def trainer(recipe: Path, root: Path, name: str, threads: int | None = None) -> Trainer:
     resolved = load(str(recipe), load_plugins(), shorthands={}, assignments=[])
-    return Trainer(resolved, new_run_dir(root, name), checkpoint_every=2, tensorboard=False)
+    return Trainer(
+        resolved, new_run_dir(root, name), threads=threads, checkpoint_every=2, tensorboard=False
+    )
 
 
 def test_cli_run_has_finite_losses_checkpoints_and_eval_and_play(
@@ -123,7 +125,9 @@ def test_resume_continues_bit_for_bit_and_seed_repeats(recipe: Path, tmp_path: P
         learning_columns(r) for r in rows(straight.run)[:2]
     ]
 
-    resumed = trainer(recipe, tmp_path, "second-half")
+    # resumed on more physics threads (`retarget train --resume RUN --threads 2`): same result
+    resumed = trainer(recipe, tmp_path, "second-half", threads=2)
+    assert resumed.env.sim.settings.threads == 2
     resumed.restore(ckpt)
     resumed.train(Budget(steps=4 * SAMPLES))
     assert resumed.progress.iteration == straight.progress.iteration == 4
