@@ -177,11 +177,20 @@ def save_image(image: np.ndarray, path: Path) -> None:
     Image.fromarray(image).save(path)
 
 
+SHEET_FRAMES = 8
+"""Frames in the picture a ``.png`` output of a rollout or clip gets."""
+
+
 def save_video(frames: Sequence[np.ndarray], path: Path, fps: float) -> None:
-    """GIF via Pillow, MP4 via imageio-ffmpeg if installed, PNG = the middle frame."""
+    """GIF via Pillow, MP4 via imageio-ffmpeg if installed, PNG = a sheet of up to
+    ``SHEET_FRAMES`` evenly spaced frames (what a rollout did, at a glance)."""
     suffix = path.suffix.lower()
     if suffix == ".png":
-        save_image(frames[len(frames) // 2], path)
+        from retarget.motion.render import contact_sheet
+
+        picks = np.linspace(0, len(frames) - 1, min(SHEET_FRAMES, len(frames))).round()
+        chosen = np.stack([frames[int(i)] for i in picks])
+        save_image(contact_sheet(chosen, columns=min(4, len(chosen))), path)
         return
     if suffix == ".gif":
         try:

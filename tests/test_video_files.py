@@ -40,3 +40,15 @@ def test_gif_round_trip(tmp_path: Path) -> None:
     with Image.open(path) as im:
         assert im.size == (64, 48)
         assert sum(1 for _ in ImageSequence.Iterator(im)) == 12
+
+
+def test_png_is_a_sheet_of_evenly_spaced_frames(tmp_path: Path) -> None:
+    from PIL import Image
+
+    path = tmp_path / "rollout.png"
+    save_video(frames(), path, fps=36.0)
+    sheet = np.asarray(Image.open(path).convert("RGB"))
+    assert sheet.shape == (2 * 48 + 4, 4 * 64 + 3 * 4, 3)  # 8 frames, 4 columns, 4 px gaps
+    first, last = sheet[:48, :64], sheet[52:, 3 * 68 :]
+    np.testing.assert_array_equal(first, frames()[0])  # the first and the last frame
+    np.testing.assert_array_equal(last, frames()[11])

@@ -25,7 +25,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("runs", nargs="+", help="run directories (runs/NAME/latest)")
     parser.add_argument("--motions", help="clip to play (default: the run's first clip)")
     parser.add_argument("--clip", type=int, default=0, help="index of the clip when a directory")
-    parser.add_argument("--out", required=True, help="output .gif, .mp4 or .png")
+    parser.add_argument("--out", required=True,
+                        help="output .gif, .mp4 or .png (8 frames, one sheet)")
     parser.add_argument("--seconds", type=float, default=8.0)
     parser.add_argument("--start", type=float, default=0.0, help="start time in the clip, s")
     parser.add_argument("--size", default="480x360", help="WIDTHxHEIGHT of each view")
