@@ -68,7 +68,10 @@ def render_rollout(
             obs, *_ = env.step(policy(obs))
             row = int(lib.rows(env.clip[:1], env.frame[:1])[0, 0])
             copy_env_pose(env, 0, data)
-            cam.lookat[:] = [data.qpos[0], data.qpos[1], 0.9]
+            if not frames:  # frame the character by its size at the start (Dino is 2.5 m)
+                top = float(data.xpos[list(env.layout.body_ids), 2].max())
+                cam.distance = 4.0 * max(1.0, top / 1.8)
+            cam.lookat[:] = [data.qpos[0], data.qpos[1], 0.5 * top]
             render.renderer.update_scene(data, camera=cam)
             scene = render.renderer.scene
             human = lib.global_pos[row].numpy() + shift
