@@ -55,7 +55,9 @@ def render_rollout(
     obs = env.place(torch.full((n,), clip), torch.full((n,), start))
     cam = mujoco.MjvCamera()
     cam.type = mujoco.mjtCamera.mjCAMERA_FREE
-    cam.distance, cam.elevation, cam.azimuth = 4.0, -15.0, 135.0
+    # frame the character by its height at the start (Dino is 2.5 m, the human 1.75 m)
+    top = float(env.sim.state.body_pos[0, :, 2].max())
+    cam.distance, cam.elevation, cam.azimuth = 4.0 * max(1.0, top / 1.8), -15.0, 135.0
     shift = np.array([0.0, ghost_offset, 0.0])
     frames = []
     # the training world has only MuJoCo's default headlight, which renders dim: light the
@@ -68,9 +70,6 @@ def render_rollout(
             obs, *_ = env.step(policy(obs))
             row = int(lib.rows(env.clip[:1], env.frame[:1])[0, 0])
             copy_env_pose(env, 0, data)
-            if not frames:  # frame the character by its size at the start (Dino is 2.5 m)
-                top = float(data.xpos[list(env.layout.body_ids), 2].max())
-                cam.distance = 4.0 * max(1.0, top / 1.8)
             cam.lookat[:] = [data.qpos[0], data.qpos[1], 0.5 * top]
             render.renderer.update_scene(data, camera=cam)
             scene = render.renderer.scene

@@ -9,6 +9,7 @@ from retarget.cli.console import out
 from retarget.deploy import export_onnx, policy_of
 from retarget.errors import RetargetError
 from retarget.registry import Registry
+from retarget.sim import describe_actuation
 from retarget.train.load import load_run
 
 
@@ -39,7 +40,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         ],
         "actuators": list(layout.actuator_names),
         "torque_limits": [float(t) for t in layout.torque_limits],
-        "actuation": _actuation(env),
+        "actuation": describe_actuation(env.sim.model, env.options.sim.actuation),
     }
     path = Path(args.out) if args.out else loaded.run / "export" / "policy.onnx"
     exported = export_onnx(loaded.algorithm, path, metadata)
@@ -48,21 +49,3 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         f"and {exported.metadata}"
     )
     return 0
-
-
-def _actuation(env) -> dict:
-    """What an action means, for an engine that replays the policy outside retarget: torque
-    fractions of ``torque_limits``, or PD targets (rad = action * scale) with these gains."""
-    sim = env.options.sim
-    if sim.actuation == "torque":
-        return {"mode": "torque"}
-    model = env.sim.model
-    return {
-        "mode": "pd",
-        "scale": [
-            float(g / -b)
-            for g, b in zip(model.actuator_gainprm[:, 0], model.actuator_biasprm[:, 1], strict=True)
-        ],
-        "kp": [float(-b) for b in model.actuator_biasprm[:, 1]],
-        "kd": [float(-b) for b in model.actuator_biasprm[:, 2]],
-    }

@@ -8,9 +8,11 @@ plugin's own ``Config`` in phase 2 (:mod:`retarget.recipe.resolve`).
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from retarget.sim.actuation import Actuation
 
 
 class Strict(BaseModel):
@@ -53,7 +55,7 @@ class SimSection(Strict):
     control_hz: float = Field(36.0, gt=0, description="policy rate (the paper uses 36 Hz)")
     substeps: int = Field(10, ge=1, description="physics steps per control step")
     threads: int = Field(0, ge=0, description="physics threads; 0 uses every core")
-    actuation: Literal["torque", "pd"] = Field(
+    actuation: Actuation = Field(
         "torque",
         description="torque: actions scale each joint's torque limit (the paper); pd: actions "
         "are joint-angle targets of torque-limited PD servos (retarget.sim.actuation)",

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from retarget.sim.actuation import apply_actuation
+from retarget.sim.actuation import apply_actuation, describe_actuation
 from retarget.sim.batched import BatchedSim, SimSettings
 
-__all__ = ["BatchedSim", "SimSettings", "apply_actuation"]
+__all__ = ["BatchedSim", "SimSettings", "apply_actuation", "describe_actuation"]

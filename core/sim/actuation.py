@@ -20,13 +20,13 @@ computed from the model's own joint ranges and force limits, so applying it twic
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, get_args
 
 import mujoco
 import numpy as np
 
 Actuation = Literal["torque", "pd"]
-ACTUATIONS: tuple[str, ...] = ("torque", "pd")
+ACTUATIONS: tuple[str, ...] = get_args(Actuation)
 
 
 def apply_actuation(
@@ -89,3 +89,19 @@ def _joint_actuators(model: mujoco.MjModel) -> np.ndarray:
         ],
         dtype=np.intp,
     )
+
+
+def describe_actuation(model: mujoco.MjModel, mode: Actuation) -> dict:
+    """What an action means in ``model`` (converted by :func:`apply_actuation`), per joint
+    actuator, for an engine that replays a policy outside retarget: ``torque`` fractions of the
+    torque limits, or ``pd`` targets (rad = action * ``scale``) with gains ``kp``, ``kd``."""
+    if mode == "torque":
+        return {"mode": "torque"}
+    ids = _joint_actuators(model)
+    kp = -model.actuator_biasprm[ids, 1]
+    return {
+        "mode": "pd",
+        "scale": (model.actuator_gainprm[ids, 0] / kp).tolist(),
+        "kp": kp.tolist(),
+        "kd": (-model.actuator_biasprm[ids, 2]).tolist(),
+    }

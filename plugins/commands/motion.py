@@ -56,12 +56,17 @@ class MotionCommand(Command):
         show.add_argument("--size", type=int, default=320, help="pixels per frame")
         show.add_argument("--start", type=float, default=0.0, help="first second to show")
         show.add_argument("--end", type=float, default=None, help="last second to show")
-        show.add_argument("--view", choices=("side", "front"), default="side",
-                          help="camera beside the direction of travel, or in front")
+        show.add_argument(
+            "--view",
+            choices=("side", "front"),
+            default="side",
+            help="camera beside the direction of travel, or in front",
+        )
         gen = sub.add_parser("generate", help="write the generated default clips as BVH")
         gen.add_argument("--out", required=True, help="directory for NAME.bvh files")
-        gen.add_argument("--names", nargs="+", default=None,
-                         help="clips to write (default: all of them)")
+        gen.add_argument(
+            "--names", nargs="+", default=None, help="clips to write (default: all of them)"
+        )
         gen.add_argument("--height", type=float, default=None, help="subject height, m")
 
     def run(self, args: argparse.Namespace) -> int:
@@ -77,15 +82,16 @@ class MotionCommand(Command):
         from retarget.motion.procedural import GENERATORS, default_motions
 
         names = tuple(args.names) if args.names else None
-        unknown = [n for n in names or () if n not in GENERATORS]
-        if unknown:
+        try:
+            clips = default_motions(args.height or sk.REFERENCE_HEIGHT, names=names)
+        except KeyError:
+            unknown = [n for n in names or () if n not in GENERATORS]
             raise RetargetError(
                 f"unknown generated motion(s) {', '.join(unknown)}",
                 hint=f"choose from {', '.join(GENERATORS)}",
-            )
+            ) from None
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
-        clips = default_motions(args.height or sk.REFERENCE_HEIGHT, names=names)
         for clip in clips:
             path = write_bvh(clip, out / f"{clip.name}.bvh")
             print(f"wrote {path} ({clip.num_frames} frames, {clip.duration:.1f} s)")
@@ -96,16 +102,34 @@ class MotionCommand(Command):
         from rich.table import Table
 
         table = Table(title="motion clips")
-        for col in ("file", "frames", "fps", "seconds", "skeleton", "height m",
-                    "contact L", "contact R", "units", "up"):
+        for col in (
+            "file",
+            "frames",
+            "fps",
+            "seconds",
+            "skeleton",
+            "height m",
+            "contact L",
+            "contact R",
+            "units",
+            "up",
+        ):
             table.add_column(col, justify="left" if col in ("file", "skeleton") else "right")
         for f in args.files:
             clip = _read(f, args)
             c = clip.contacts
-            table.add_row(Path(f).name, str(clip.num_frames), f"{clip.fps:g}",
-                          f"{clip.duration:.2f}", clip.skeleton, f"{clip.height:.2f}",
-                          f"{c[:, 0].mean():.2f}", f"{c[:, 1].mean():.2f}",
-                          str(clip.meta.get("units", "-")), str(clip.meta.get("up", "-")))
+            table.add_row(
+                Path(f).name,
+                str(clip.num_frames),
+                f"{clip.fps:g}",
+                f"{clip.duration:.2f}",
+                clip.skeleton,
+                f"{clip.height:.2f}",
+                f"{c[:, 0].mean():.2f}",
+                f"{c[:, 1].mean():.2f}",
+                str(clip.meta.get("units", "-")),
+                str(clip.meta.get("up", "-")),
+            )
         # full names and numbers even when piped (rich would squeeze the table to 80 columns)
         Console(soft_wrap=True, width=None if sys.stdout.isatty() else 200).print(table)
         return 0
@@ -120,13 +144,15 @@ class MotionCommand(Command):
             raise RetargetError(f"--out must end in .png or .mp4, got '{out.name}'")
         clip = _read(args.file, args)
         first = int(np.clip(round(args.start * clip.fps), 0, clip.num_frames - 1))
-        last = clip.num_frames - 1 if args.end is None else int(
-            np.clip(round(args.end * clip.fps), first, clip.num_frames - 1))
+        last = (
+            clip.num_frames - 1
+            if args.end is None
+            else int(np.clip(round(args.end * clip.fps), first, clip.num_frames - 1))
+        )
         if suffix == ".png":
             count = max(1, min(args.frames, last - first + 1))
             frames = np.linspace(first, last, count).round().astype(int)
-            images = render_frames(clip, frames, width=args.size, height=args.size,
-                                   view=args.view)
+            images = render_frames(clip, frames, width=args.size, height=args.size, view=args.view)
             write_png(out, contact_sheet(images, columns=min(4, count)))
         else:
             try:
@@ -138,10 +164,10 @@ class MotionCommand(Command):
                 ) from None
             step = max(1, round(clip.fps / 30.0))
             frames = np.arange(first, last + 1, step)
-            images = render_frames(clip, frames, width=args.size, height=args.size,
-                                   view=args.view)
-            writer = imageio_ffmpeg.write_frames(str(out), (args.size, args.size),
-                                                 fps=clip.fps / step)
+            images = render_frames(clip, frames, width=args.size, height=args.size, view=args.view)
+            writer = imageio_ffmpeg.write_frames(
+                str(out), (args.size, args.size), fps=clip.fps / step
+            )
             writer.send(None)
             for img in images:
                 writer.send(np.ascontiguousarray(img))
