@@ -6,6 +6,7 @@ import os
 import sys
 
 from rich.console import Console
+from rich.markup import escape
 
 # Piped or redirected output (logs, CI) gets no terminal width: rich would squeeze the wide
 # metric tables into 80 columns of ellipses. Such output is read in files, so give it room.
@@ -15,8 +16,10 @@ err = Console(stderr=True, highlight=False, soft_wrap=True)
 
 
 def error(message: str) -> None:
-    err.print(f"[bold red]error:[/] {message}", markup=True)
+    """Print a user error; the message is plain text (``[a, b]`` in it is not rich markup)."""
+    err.print(f"[bold red]error:[/] {escape(message)}", markup=True)
 
 
 def warning(message: str) -> None:
-    err.print(f"[yellow]warning:[/] {message}", markup=True)
+    """Print a warning; the message is plain text, like :func:`error`'s."""
+    err.print(f"[yellow]warning:[/] {escape(message)}", markup=True)

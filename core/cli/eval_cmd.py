@@ -10,6 +10,7 @@ from rich.progress import Progress
 from rich.table import Table
 
 from retarget.cli.console import out
+from retarget.cli.run_changes import add_run_change_args
 from retarget.eval import EvalSettings, evaluate
 from retarget.registry import Registry
 from retarget.train.load import load_run
@@ -46,6 +47,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--num-envs", type=int, default=64, help="runs evaluated together")
     parser.add_argument("--json", dest="json_out", help="where to write the JSON report")
     parser.add_argument("--checkpoint", help="a specific checkpoint file (default: latest)")
+    add_run_change_args(parser)
     parser.set_defaults(handler=run)
 
 
@@ -69,6 +71,8 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         motions=args.motions,
         terminations=False,
         checkpoint=args.checkpoint,
+        scene=args.scene,
+        assignments=args.assignments,
     )
     fall = None
     for comp in loaded.resolved.of_kind("termination"):

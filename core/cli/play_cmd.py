@@ -10,6 +10,7 @@ import torch
 
 from retarget.character_view import label, save_video
 from retarget.cli.console import out
+from retarget.cli.run_changes import add_run_change_args
 from retarget.errors import RetargetError
 from retarget.motion.device_recording import DeviceRecording, read_recording
 from retarget.motion.device_stream import align_to, resample_stream
@@ -36,16 +37,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="RECORDING",
         help="drive the policy from a recorded device stream (.jsonl) instead of --motions",
     )
+    add_run_change_args(parser)
     parser.set_defaults(handler=run)
 
 
 def _driven_by(rec: DeviceRecording, path: str, registry: Registry, args: argparse.Namespace):
     """A run whose env's only clip carries the recording's devices (at the control rate,
     calibrated to the character's start) over a standing idle body (start pose only)."""
-    hz = locked_recipe(resolve_run(path), registry)[0].recipe.sim.control_hz
+    changes = {"scene": args.scene, "assignments": args.assignments}
+    hz = locked_recipe(resolve_run(path), registry, **changes)[0].recipe.sim.control_hz
     stream = resample_stream(rec, hz)
     seconds = len(stream) / hz + 1.0
-    loaded = load_run(path, registry, num_envs=1, clips=[idle_clip(seconds)])
+    loaded = load_run(path, registry, num_envs=1, clips=[idle_clip(seconds)], **changes)
     lib = loaded.env.library
     rows = int(lib.start[0]) + torch.arange(len(stream))
     start_hmd = lib.devices[int(lib.start[0]), 0].double().numpy()
@@ -69,7 +72,14 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         if stream is not None:
             loaded, clip_name = _driven_by(stream, path, registry, args)
         else:
-            loaded = load_run(path, registry, num_envs=1, motions=args.motions)
+            loaded = load_run(
+                path,
+                registry,
+                num_envs=1,
+                motions=args.motions,
+                scene=args.scene,
+                assignments=args.assignments,
+            )
         env = loaded.env
         if not 0 <= args.clip < env.library.num_clips:
             raise RetargetError(f"--clip {args.clip}: the motions hold {env.library.num_clips}")

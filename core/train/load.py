@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -13,17 +14,24 @@ from retarget.env.build import env_from_recipe
 from retarget.errors import RecipeError
 from retarget.kinds import Algorithm
 from retarget.motion.clip import MotionClip
-from retarget.recipe import ResolvedRecipe, parse_text, resolve
+from retarget.recipe import ResolvedRecipe, apply_overrides, parse_text, resolve
 from retarget.registry import Registry
 from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
 
 
-def locked_recipe(run: Path, registry: Registry) -> tuple[ResolvedRecipe, dict]:
+def locked_recipe(
+    run: Path, registry: Registry, *, scene: str | None = None, assignments: Sequence[str] = ()
+) -> tuple[ResolvedRecipe, dict]:
     """The run's ``recipe.lock.yaml`` resolved against the installed plugins, and its lock
-    section (plugin versions the run started with)."""
+    section (plugin versions the run started with).
+
+    ``scene`` and ``assignments`` (``--scene``/``--set``) change the recipe before it is
+    resolved, e.g. to watch a policy in a scene it was not trained in; errors name the flag.
+    """
     data = yaml.safe_load((run / LOCK).read_text())
     lock = data.pop("_lock", {})
     source = parse_text(yaml.safe_dump(data, sort_keys=False), str(run / LOCK), ".yaml")
+    source = apply_overrides(source, shorthands={"scene": scene}, assignments=assignments)
     return resolve(source, registry), lock
 
 
@@ -46,10 +54,13 @@ def load_run(
     clips: list[MotionClip] | None = None,
     terminations: bool = False,
     checkpoint: str | Path | None = None,
+    scene: str | None = None,
+    assignments: Sequence[str] = (),
 ) -> LoadedRun:
-    """A trained run ready to act: env built from its recipe (optionally on other motions)."""
+    """A trained run ready to act: env built from its recipe (optionally on other motions, or
+    with ``scene``/``assignments`` changing the recipe; see :func:`locked_recipe`)."""
     run = resolve_run(path)
-    resolved, _ = locked_recipe(run, registry)
+    resolved, _ = locked_recipe(run, registry, scene=scene, assignments=assignments)
     if "algorithm" not in resolved.components:
         raise RecipeError("the run's recipe has no algorithm", file=str(run / LOCK))
     ckpt = Path(checkpoint) if checkpoint is not None else latest_checkpoint(run)
@@ -60,5 +71,24 @@ def load_run(
     algorithm = resolved.component("algorithm").instantiate()
     assert isinstance(algorithm, Algorithm)
     algorithm.setup(env)
-    algorithm.load_state_dict(state["algorithm"])
+    try:
+        algorithm.load_state_dict(state["algorithm"])
+    except (RuntimeError, KeyError, ValueError) as exc:
+        changed = [*([f"--scene {scene}"] if scene else []), *(f"--set {a}" for a in assignments)]
+        raise RecipeError(
+            f"checkpoint {ckpt} does not fit the policy this recipe builds "
+            f"(observation sizes {dict(env.obs_dims)}): {_first_mismatch(exc)}",
+            file=str(run / LOCK),
+            hint=(f"{', '.join(changed)} changed what the policy observes; change only what it "
+                  "does not see (a scene seen through the same observers, clips)")
+            if changed else None,
+        ) from None
     return LoadedRun(run, ckpt, resolved, env, algorithm, state.get("progress", {}))
+
+
+def _first_mismatch(exc: Exception) -> str:
+    """The informative line of torch's ``load_state_dict`` error (its first line only says
+    which module failed)."""
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    detail = [line for line in lines if "size mismatch" in line or "key" in line.lower()]
+    return (detail or lines or [type(exc).__name__])[0]

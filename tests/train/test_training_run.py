@@ -274,3 +274,29 @@ def test_the_main_command_runs_out_of_the_box(tmp_path: Path) -> None:
     assert math.isfinite(float(row["policy_loss"]))
     lock = (run / "recipe.lock.yaml").read_text()
     assert "type: dino" in lock and "type: hmd" in lock and "type: ppo" in lock
+
+
+def test_a_run_plays_in_another_scene_and_refuses_other_observations(
+    recipe: Path, tmp_path: Path, capsys
+) -> None:
+    from retarget.train.load import load_run
+
+    assert main(["train", str(recipe), "--steps", str(SAMPLES), "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    run = tmp_path / "tiny" / "latest"
+    loaded = load_run(run, load_plugins(), scene="chair", assignments=["scene.position=[2,0]"])
+    assert loaded.resolved.component("scene").entry.name == "chair"
+    model = loaded.env.sim.model
+    chair = [model.body(i).name for i in range(model.nbody) if "chair" in model.body(i).name]
+    assert chair, "the chair's bodies are in the compiled model"
+    video = tmp_path / "chair.png"
+    assert main(["play", str(run), "--scene", "chair", "--set", "scene.position=[1,0]",
+                 "--out", str(video), "--seconds", "0.3", "--size", "96x72"]) == 0  # fmt: skip
+    assert video.stat().st_size > 1000
+
+    # a height map the policy never saw changes the observation: refused, naming the flag
+    rc = main(["eval", str(run), "--set", "observers=[height_map]", "--every", "90",
+               "--max-seconds", "0.5", "--num-envs", "2"])  # fmt: skip
+    assert rc != 0
+    err = capsys.readouterr().err
+    assert "does not fit" in err and "--set observers=[height_map]" in err
