@@ -22,13 +22,13 @@ def add_recipe_flags(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--algorithm", help="algorithm plugin name")
     parser.add_argument("--motions", help="motion file or directory")
     parser.add_argument("--seed", help="random seed")
+    add_set_flag(parser, "override any recipe field, e.g. --set rewards.action_diff.weight=0.2")
+
+
+def add_set_flag(parser: argparse.ArgumentParser, help: str) -> None:
+    """``--set PATH=VALUE`` (repeatable) into ``args.assignments``."""
     parser.add_argument(
-        "--set",
-        dest="assignments",
-        action="append",
-        default=[],
-        metavar="PATH=VALUE",
-        help="override any recipe field, e.g. --set rewards.action_diff.weight=0.2",
+        "--set", dest="assignments", action="append", default=[], metavar="PATH=VALUE", help=help
     )
 
 

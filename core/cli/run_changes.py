@@ -10,15 +10,10 @@ from __future__ import annotations
 
 import argparse
 
+from retarget.cli.recipe_cmd import add_set_flag
+
 
 def add_run_change_args(parser: argparse.ArgumentParser) -> None:
     """The two flags, with the same meaning as on ``retarget train``."""
     parser.add_argument("--scene", help="replace the run's scene plugin, e.g. chair")
-    parser.add_argument(
-        "--set",
-        dest="assignments",
-        action="append",
-        default=[],
-        metavar="PATH=VALUE",
-        help="change a field of the run's recipe, e.g. --set scene.position=[-0.3,0]",
-    )
+    add_set_flag(parser, "change a field of the run's recipe, e.g. --set scene.position=[-0.3,0]")
