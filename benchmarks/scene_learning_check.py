@@ -36,7 +36,7 @@ VARIANTS = {"height_map": ["--observers", "height_map"], "blind": []}
 COLUMNS = (
     ("box_side_per_min", "side hits/min", "{:.2f}"),
     ("box_top_per_min", "top steps/min", "{:.2f}"),
-    ("box_side_fraction", "side steps", "{:.3f}"),
+    ("box_side_fraction", "side frac", "{:.3f}"),
     ("falls_per_min", "falls/min", "{:.2f}"),
     ("success_20s", "succ 20s", "{:.2f}"),
     ("success_frame", "succ frame", "{:.2f}"),
