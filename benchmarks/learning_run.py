@@ -28,6 +28,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import yaml
+
 TRAIN = [
     "bandai_d2_walk_normal_020",
     "bandai_d2_walk_elderly_004",
@@ -127,6 +129,12 @@ def compare(runs: list[Path], marks: list[float]) -> str:
     return "\n".join(lines)
 
 
+def run_name(run: Path) -> str:
+    """A finished run's recipe name (its reports are named after it, not after the flags)."""
+    lock = yaml.safe_load((run / "recipe.lock.yaml").read_text())
+    return str(lock.get("name") or run.resolve().parent.name)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--character", default="human")
@@ -152,6 +160,7 @@ def main() -> None:
     name = f"{args.character}-{args.sensors}"
     if args.run:
         run = Path(args.run)
+        name = run_name(run)
     else:
         sets = [x for s in args.set for x in ("--set", s)]
         retarget("train", "--character", args.character, "--sensors", args.sensors,
