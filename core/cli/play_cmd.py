@@ -41,10 +41,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
 
 
+def _changes(args: argparse.Namespace) -> dict:
+    """``--scene``/``--set`` as :func:`load_run` keywords."""
+    return {"scene": args.scene, "assignments": args.assignments}
+
+
 def _driven_by(rec: DeviceRecording, path: str, registry: Registry, args: argparse.Namespace):
     """A run whose env's only clip carries the recording's devices (at the control rate,
     calibrated to the character's start) over a standing idle body (start pose only)."""
-    changes = {"scene": args.scene, "assignments": args.assignments}
+    changes = _changes(args)
     hz = locked_recipe(resolve_run(path), registry, **changes)[0].recipe.sim.control_hz
     stream = resample_stream(rec, hz)
     seconds = len(stream) / hz + 1.0
@@ -72,14 +77,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         if stream is not None:
             loaded, clip_name = _driven_by(stream, path, registry, args)
         else:
-            loaded = load_run(
-                path,
-                registry,
-                num_envs=1,
-                motions=args.motions,
-                scene=args.scene,
-                assignments=args.assignments,
-            )
+            loaded = load_run(path, registry, num_envs=1, motions=args.motions, **_changes(args))
         env = loaded.env
         if not 0 <= args.clip < env.library.num_clips:
             raise RetargetError(f"--clip {args.clip}: the motions hold {env.library.num_clips}")
