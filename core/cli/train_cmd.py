@@ -20,6 +20,7 @@ from retarget.train.run_dir import (
     resolve_run,
 )
 from retarget.train.runner import Budget, Trainer
+from retarget.train.warm_start import INIT_FROM, warm_start
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -28,6 +29,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--steps", type=int, help="stop after this many environment steps")
     parser.add_argument("--minutes", type=float, help="stop after this many minutes")
     parser.add_argument("--resume", metavar="RUN", help="continue a run (runs/NAME/latest)")
+    parser.add_argument(
+        "--init-from",
+        metavar="RUN",
+        help="start from another run's latest weights (a new run: its own recipe, fresh "
+        "optimiser); inputs are matched by sensor/observer name, new observers start at zero "
+        "weight",
+    )
     parser.add_argument("--runs-dir", default="runs", help="where run directories go")
     parser.add_argument("--num-envs", type=int, help="override env.num_envs")
     parser.add_argument(
@@ -56,6 +64,11 @@ def _resume_recipe(run: Path, registry: Registry):
 def run(args: argparse.Namespace, registry: Registry) -> int:
     if args.steps is None and args.minutes is None and args.resume is None:
         out.print("no --steps or --minutes given: training until Ctrl-C (checkpoint on exit)")
+    if args.resume and args.init_from:
+        raise RecipeError(
+            "--resume continues a run with its own weights; --init-from starts a new one",
+            hint="use one of them",
+        )
     if args.resume:
         run_dir = resolve_run(args.resume)
         if args.recipe or args.assignments:
@@ -83,6 +96,11 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         ckpt = latest_checkpoint(run_dir)
         trainer.restore(ckpt)
         out.print(f"resumed {ckpt} at {trainer.progress.env_steps} steps")
+    if args.init_from:
+        start = warm_start(trainer.algorithm, trainer.env.obs_layout, args.init_from, registry)
+        (run_dir / INIT_FROM).write_text(f"{start.checkpoint}\n{start.summary()}\n")
+        trainer.save()  # a resume of this run starts from these weights, not from scratch
+        out.print(f"weights from {start.checkpoint}\n{start.summary()}", markup=False)
     out.print(
         f"run directory: {run_dir}  ({trainer.env.num_envs} envs, "
         f"{trainer.env.character.name}, obs {dict(trainer.env.obs_dims)})"

@@ -162,6 +162,13 @@ class RetargetEnv:
         """Width of one observation source (``proprio``, a sensor's or observer's name)."""
         return int(self._sources[source][1])
 
+    @property
+    def obs_layout(self) -> dict[str, list[tuple[str, int]]]:
+        """Each group's sources in column order, ``(name, size)``: which columns of a group
+        come from which sensor or observer (used to carry weights between recipes)."""
+        sizes = {name: int(source[1]) for name, source in self._sources.items()}
+        return {g: [(s, sizes[s]) for s in names] for g, names in self.groups.items()}
+
     def _default_groups(self) -> dict[str, list[str]]:
         actor = [s.name for s in self.sensors] + ["proprio"] + [o.name for o in self.observers]
         return {"actor": actor, "critic": [*actor, "privileged"]}

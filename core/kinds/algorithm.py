@@ -8,6 +8,7 @@ from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import torch
 
+from retarget.errors import PluginError
 from retarget.kinds.base import Plugin
 
 
@@ -55,6 +56,21 @@ class Algorithm(Plugin):
 
     @abstractmethod
     def load_state_dict(self, state: Mapping[str, Any]) -> None: ...
+
+    def warm_start(self, state: Mapping[str, Any], inputs: Mapping[str, torch.Tensor]) -> None:
+        """Start from the learned weights of another run's checkpoint (``state``, what its
+        ``state_dict`` returned) instead of from scratch: fine-tuning a flat-ground walker in a
+        scene, or a curriculum that changes the recipe between stages.
+
+        ``inputs`` maps each observation group to a ``(D_new,)`` long tensor: the column of the
+        old group that feeds each new column, or -1 for an input the old run did not have (a
+        new observer). Nothing else of the old run is taken over (optimiser, counters). An
+        algorithm that cannot do this keeps this default, which says so.
+        """
+        raise PluginError(
+            "cannot start from another run's weights", plugin=self.name,
+            hint="train from scratch (drop --init-from)",
+        )
 
     def policy(self) -> tuple[str, torch.nn.Module]:
         """The deployable policy: ``(group, module)`` where ``module`` maps that observation

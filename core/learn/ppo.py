@@ -32,6 +32,7 @@ from retarget.learn.config import PPOConfig
 from retarget.learn.networks import Critic, GaussianActor
 from retarget.learn.normalizer import GroupNormalizer, RunningNormalizer
 from retarget.learn.storage import RolloutStorage
+from retarget.learn.widen import sub_state, widen_module, widen_normalizer
 
 
 @contextmanager
@@ -358,3 +359,14 @@ class PPOLearner:
         self.finished_lengths.extend(state["finished_lengths"])
         self.iteration = int(state["iteration"])
         self.env_steps = int(state["env_steps"])
+
+    def warm_start(self, state: Mapping[str, Any], inputs: Mapping[str, torch.Tensor]) -> None:
+        """Networks and observation statistics from another run's :meth:`state_dict`, input
+        columns remapped by ``inputs`` (see :mod:`retarget.learn.widen`); the optimiser and
+        the counters start fresh, so this is a new run, not a resume."""
+        widen_module(self.actor, state["actor"], inputs[self.actor_key])
+        widen_module(self.critic, state["critic"], inputs[self.critic_key])
+        for key, norm in self.obs_norm.groups.items():
+            widen_normalizer(norm, sub_state(state["obs_norm"], f"groups.{key}"), inputs[key])
+        self.value_norm.load_state_dict(state["value_norm"])
+        self.last_obs = None

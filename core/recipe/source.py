@@ -53,6 +53,9 @@ def _yaml_lines(node: yaml.Node, prefix: str, out: dict[str, int]) -> None:
             _yaml_lines(item, dotted, out)
 
 
+LOCK_SECTION = "_lock"
+
+
 def parse_text(text: str, path: str, suffix: str) -> RecipeSource:
     """Parse recipe text; ``suffix`` picks TOML for ``.toml``, YAML otherwise."""
     lines: dict[str, int] = {}
@@ -80,6 +83,9 @@ def parse_text(text: str, path: str, suffix: str) -> RecipeSource:
         raise RecipeError(
             f"a recipe must be a mapping of fields, got {type(data).__name__}", file=path
         )
+    # A run's recipe.lock.yaml is a recipe plus its provenance: training from it reproduces
+    # the run, so the provenance section is read past rather than refused.
+    data.pop(LOCK_SECTION, None)
     return RecipeSource(data=data, path=path, lines=lines)
 
 

@@ -55,6 +55,9 @@ class PPO(Algorithm):
     def load_state_dict(self, state: Mapping[str, Any]) -> None:
         self._ready().load_state_dict(state)
 
+    def warm_start(self, state: Mapping[str, Any], inputs: Mapping[str, torch.Tensor]) -> None:
+        self._ready().warm_start(state, inputs)
+
 
 @retarget.hookimpl
 def register_algorithms(register) -> None:

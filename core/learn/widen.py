@@ -1,0 +1,71 @@
+"""Carry trained weights into networks whose inputs changed (a new observer, a reordering).
+
+A network's first linear layer is the only one whose shape depends on the observation; every
+other tensor must match exactly. Columns for inputs the old network never saw start at zero
+weight, so the widened network computes exactly what the old one did until training moves
+those weights: a flat-ground walker keeps walking while it learns to use a height map.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import torch
+from torch import nn
+
+
+def first_linear_weight(module: nn.Module) -> str:
+    """State-dict key of the first ``nn.Linear`` weight (the layer that reads observations)."""
+    for name, child in module.named_modules():
+        if isinstance(child, nn.Linear):
+            return f"{name}.weight"
+    raise ValueError(f"{type(module).__name__} has no linear layer")
+
+
+def widen_module(module: nn.Module, old: Mapping[str, torch.Tensor], index: torch.Tensor) -> None:
+    """Load ``old`` (a state dict) into ``module``; its input columns follow ``index``.
+
+    ``index[j]`` is the old input column feeding new column ``j``, or -1 for a new input.
+    Raises ``ValueError`` naming the tensor whose shape does not fit.
+    """
+    first = first_linear_weight(module)
+    merged = {}
+    for key, new in module.state_dict().items():
+        if key not in old:
+            raise ValueError(f"the checkpoint has no '{key}'")
+        value = old[key]
+        if key == first:
+            known = index >= 0
+            too_few = known.any() and int(index.max()) >= value.shape[1]
+            if value.shape[0] != new.shape[0] or too_few:
+                raise ValueError(
+                    f"'{key}' is {tuple(value.shape)} in the checkpoint, {tuple(new.shape)} here"
+                )
+            weight = torch.zeros_like(new)
+            weight[:, known] = value[:, index[known]].to(new.dtype)
+            value = weight
+        elif value.shape != new.shape:
+            raise ValueError(
+                f"'{key}' is {tuple(value.shape)} in the checkpoint, {tuple(new.shape)} here"
+            )
+        merged[key] = value
+    module.load_state_dict(merged)
+
+
+def widen_normalizer(
+    module: nn.Module, old: Mapping[str, torch.Tensor], index: torch.Tensor
+) -> None:
+    """Running statistics of the kept columns; new columns start unscaled (mean 0, var 1) with
+    the old sample count, so they stay near unscaled while their zero weights grow."""
+    known = index >= 0
+    mean = torch.zeros_like(module.mean)
+    var = torch.ones_like(module.var)
+    mean[known] = old["mean"][index[known]].to(mean.dtype)
+    var[known] = old["var"][index[known]].to(var.dtype)
+    module.load_state_dict({"mean": mean, "var": var, "count": old["count"].clone()})
+
+
+def sub_state(state: Mapping[str, torch.Tensor], prefix: str) -> dict[str, torch.Tensor]:
+    """The entries of a flat state dict under ``prefix.`` with the prefix removed."""
+    head = prefix + "."
+    return {k[len(head):]: v for k, v in state.items() if k.startswith(head)}
