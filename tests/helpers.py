@@ -11,6 +11,31 @@ SHARED_MOCAP = Path(
     os.environ.get("RETARGET_SHARED_DATA", str(REPO.parent / "shared" / "data" / "mocap"))
 )
 
+# A recipe that trains in a second: human, three-point sensors, tiny networks, 4 environments.
+TINY = """\
+name: tiny
+seed: 7
+character: human
+sensors: [three_point]
+rewards:
+  joint_pos: {weight: 4.0, k: 25.0}
+  link_pos: {weight: 2.5, k: 6.0}
+  action_diff: {weight: 1.5, k: 10.0}
+  fail_penalty: {weight: 1.0, value: -5.0}
+terminations:
+  fall: {}
+  episode_cap: {max_steps: 20}
+algorithm:
+  type: ppo
+  rollout_steps: 8
+  actor_hidden: [32]
+  critic_hidden: [32]
+  minibatch_size: 16
+  epochs: 2
+env: {num_envs: 4}
+sim: {threads: 1}
+"""
+
 
 def assert_state_equal(a: Any, b: Any, where: str = "state") -> None:
     """Bit-for-bit equality of nested checkpoint states (tensors, arrays, dicts, lists),

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from helpers import assert_state_equal
+from helpers import TINY, assert_state_equal
 
 from retarget.checkpoint import load_checkpoint
 from retarget.cli.main import main
@@ -24,29 +24,6 @@ from retarget.recipe import load
 from retarget.train.run_dir import latest_checkpoint, new_run_dir
 from retarget.train.runner import Budget, Trainer
 
-TINY = """\
-name: tiny
-seed: 7
-character: human
-sensors: [three_point]
-rewards:
-  joint_pos: {weight: 4.0, k: 25.0}
-  link_pos: {weight: 2.5, k: 6.0}
-  action_diff: {weight: 1.5, k: 10.0}
-  fail_penalty: {weight: 1.0, value: -5.0}
-terminations:
-  fall: {}
-  episode_cap: {max_steps: 20}
-algorithm:
-  type: ppo
-  rollout_steps: 8
-  actor_hidden: [32]
-  critic_hidden: [32]
-  minibatch_size: 16
-  epochs: 2
-env: {num_envs: 4}
-sim: {threads: 1}
-"""
 SAMPLES = 4 * 8  # num_envs x rollout_steps: env steps per iteration
 TIMING = ("seconds", "_per_s", "elapsed_s")
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 import torch
+from helpers import TINY
 from torch import nn
 
 from retarget.cli.main import main
@@ -17,28 +18,6 @@ from retarget.train.load import load_run
 from retarget.train.run_dir import new_run_dir
 from retarget.train.runner import Budget, Trainer
 from retarget.train.warm_start import INIT_FROM, input_maps, warm_start
-
-FLAT = """\
-name: flat
-seed: 3
-character: human
-sensors: [three_point]
-rewards:
-  joint_pos: {weight: 4.0, k: 25.0}
-  fail_penalty: {weight: 1.0, value: -5.0}
-terminations:
-  fall: {}
-  episode_cap: {max_steps: 20}
-algorithm:
-  type: ppo
-  rollout_steps: 8
-  actor_hidden: [32]
-  critic_hidden: [32]
-  minibatch_size: 16
-  epochs: 2
-env: {num_envs: 4}
-sim: {threads: 1}
-"""
 
 
 def test_input_maps_match_sources_by_name_and_size() -> None:
@@ -68,7 +47,7 @@ def test_widened_network_ignores_new_inputs_until_trained() -> None:
 def flat_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp("flat")
     recipe = root / "flat.yaml"
-    recipe.write_text(FLAT)
+    recipe.write_text(TINY.replace("name: tiny", "name: flat"))
     assert main(["train", str(recipe), "--steps", "64", "--runs-dir", str(root),
                  "--no-tensorboard"]) == 0  # fmt: skip
     return root / "flat" / "latest"
