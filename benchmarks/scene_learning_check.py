@@ -15,6 +15,9 @@ Run (by hand; ``--minutes`` per variant, the two one after the other unless ``--
     .venv/bin/python benchmarks/scene_learning_check.py --minutes 30 --parallel
     .venv/bin/python benchmarks/scene_learning_check.py --runs runs/scene_check/A/latest \
         runs/scene_check/B/latest      # only evaluate finished runs (height map first)
+    .venv/bin/python benchmarks/scene_learning_check.py --prefix boxes --runs \
+        warm=runs/boxes/warm/latest scratch=runs/boxes/scratch/latest \
+        --eval-set scene.height=[0.05,0.25]   # any runs, labelled; evaluated in another scene
 
 Extra ``--set k=v`` pairs go to ``retarget train`` for both variants (``--parallel`` adds
 ``sim.threads=1``). The clip split is ``learning_run.py``'s (training: five Bandai walks and
@@ -72,8 +75,18 @@ def train(args: argparse.Namespace, motions: Path) -> dict[str, Path]:
     return runs
 
 
+def labelled_runs(specs: list[str]) -> dict[str, Path]:
+    """``--runs``: ``LABEL=RUN`` pairs, or bare runs named after the variants in order."""
+    if all("=" in s for s in specs):
+        return {label: Path(run) for label, run in (s.split("=", 1) for s in specs)}
+    if len(specs) != len(VARIANTS) or any("=" in s for s in specs):
+        raise SystemExit(f"--runs: give {' '.join(VARIANTS)} runs in order, or LABEL=RUN pairs")
+    return dict(zip(VARIANTS, (Path(r) for r in specs), strict=True))
+
+
 def evaluate(runs: dict[str, Path], dirs: dict[str, Path], args: argparse.Namespace) -> dict:
-    """``retarget eval`` of every run on every split (the runs' own ``path_boxes`` scene)."""
+    """``retarget eval`` of every run on every split (the runs' own ``path_boxes`` scene,
+    changed by ``--eval-set``)."""
     report: dict[str, dict] = {}
     for variant, run in runs.items():
         report[variant] = {"run": str(run)}
@@ -81,7 +94,8 @@ def evaluate(runs: dict[str, Path], dirs: dict[str, Path], args: argparse.Namesp
             path = Path(args.out) / f"{args.prefix}-{variant}-eval-{split}.json"
             retarget("eval", str(run), "--motions", str(dirs[split]), "--json", str(path),
                      "--every", str(args.every), "--max-seconds", str(args.max_seconds),
-                     "--num-envs", str(args.eval_envs))  # fmt: skip
+                     "--num-envs", str(args.eval_envs),
+                     *[x for a in args.eval_set for x in ("--set", a)])  # fmt: skip
             overall = json.loads(path.read_text())["overall"]
             if "box_side_per_min" not in overall:
                 raise SystemExit(f"{path}: no box metrics; was {run} trained with path_boxes?")
@@ -91,7 +105,7 @@ def evaluate(runs: dict[str, Path], dirs: dict[str, Path], args: argparse.Namesp
 
 def table(report: dict) -> str:
     """The comparison as fixed-width text, one row per variant and split."""
-    head = f"{'variant':<12}{'split':<14}" + "".join(f"{c[1]:>15}" for c in COLUMNS)
+    head = f"{'run':<12}{'split':<14}" + "".join(f"{c[1]:>15}" for c in COLUMNS)
     rows = [head, "-" * len(head)]
     for variant, splits in report.items():
         for split in SPLITS:
@@ -108,18 +122,18 @@ def main() -> None:
     parser.add_argument("--prefix", default="human-three_point-path_boxes")
     parser.add_argument("--set", action="append", default=[], help="passed to retarget train")
     parser.add_argument("--parallel", action="store_true", help="train both at once")
-    parser.add_argument("--runs", nargs=2, metavar=("HEIGHT_MAP", "BLIND"),
-                        help="evaluate these finished runs instead of training")  # fmt: skip
+    parser.add_argument("--runs", nargs="+", metavar="RUN",
+                        help="evaluate these finished runs instead of training: the height-map "
+                        "and the blind run, or LABEL=RUN pairs")  # fmt: skip
+    parser.add_argument("--eval-set", action="append", default=[], metavar="PATH=VALUE",
+                        help="passed to retarget eval, e.g. scene.height=[0.05,0.25]")  # fmt: skip
     parser.add_argument("--every", type=int, default=30, help="eval: a run every K frames")
     parser.add_argument("--max-seconds", type=float, default=30.0, help="eval: run length")
     parser.add_argument("--eval-envs", type=int, default=64, help="eval: runs batched together")
     args = parser.parse_args()
     out = Path(args.out)
     dirs = link_split(out)
-    if args.runs:
-        runs = dict(zip(VARIANTS, (Path(r) for r in args.runs), strict=True))
-    else:
-        runs = train(args, dirs["train"])
+    runs = labelled_runs(args.runs) if args.runs else train(args, dirs["train"])
     report = evaluate(runs, dirs, args)
     text = table(report)
     print(text)
