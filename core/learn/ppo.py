@@ -366,7 +366,11 @@ class PPOLearner:
         the counters start fresh, so this is a new run, not a resume."""
         widen_module(self.actor, state["actor"], inputs[self.actor_key])
         widen_module(self.critic, state["critic"], inputs[self.critic_key])
+        # the old statistics count as ten rollouts: new inputs find their scale in a few
+        # iterations while the kept ones barely move
+        count = 10.0 * self.config.rollout_steps * self.num_envs
         for key, norm in self.obs_norm.groups.items():
-            widen_normalizer(norm, sub_state(state["obs_norm"], f"groups.{key}"), inputs[key])
+            old = sub_state(state["obs_norm"], f"groups.{key}")
+            widen_normalizer(norm, old, inputs[key], count)
         self.value_norm.load_state_dict(state["value_norm"])
         self.last_obs = None

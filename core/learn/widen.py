@@ -53,16 +53,24 @@ def widen_module(module: nn.Module, old: Mapping[str, torch.Tensor], index: torc
 
 
 def widen_normalizer(
-    module: nn.Module, old: Mapping[str, torch.Tensor], index: torch.Tensor
+    module: nn.Module, old: Mapping[str, torch.Tensor], index: torch.Tensor, count: float
 ) -> None:
-    """Running statistics of the kept columns; new columns start unscaled (mean 0, var 1) with
-    the old sample count, so they stay near unscaled while their zero weights grow."""
+    """Running statistics of the kept columns, weighted as ``count`` samples; new columns start
+    empty (mean 0, variance 0).
+
+    The small count is what lets the new columns learn their scale: merged with a count of
+    millions, their statistics would never move from the start, and a height map (a few cm
+    spread) read unscaled would need weights ~30x larger than every other input, which Adam's
+    fixed step size takes ~30x longer to grow. The kept columns' statistics, from the same
+    character on similar motion, move little when merged with the new run's samples.
+    """
     known = index >= 0
     mean = torch.zeros_like(module.mean)
-    var = torch.ones_like(module.var)
+    var = torch.zeros_like(module.var)
     mean[known] = old["mean"][index[known]].to(mean.dtype)
     var[known] = old["var"][index[known]].to(var.dtype)
-    module.load_state_dict({"mean": mean, "var": var, "count": old["count"].clone()})
+    total = torch.as_tensor(min(float(old["count"]), count), dtype=module.count.dtype)
+    module.load_state_dict({"mean": mean, "var": var, "count": total})
 
 
 def sub_state(state: Mapping[str, torch.Tensor], prefix: str) -> dict[str, torch.Tensor]:

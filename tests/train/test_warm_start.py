@@ -11,7 +11,7 @@ from helpers import TINY
 from torch import nn
 
 from retarget.cli.main import main
-from retarget.learn.widen import widen_module
+from retarget.learn.widen import widen_module, widen_normalizer
 from retarget.loader import load_plugins
 from retarget.recipe import load
 from retarget.train.load import load_run
@@ -99,3 +99,22 @@ def test_cli_init_from_records_the_source_and_refuses_other_networks(
 
     rc = main(["train", "--resume", str(run), "--init-from", str(flat_run)])
     assert rc != 0 and "--init-from starts a new one" in capsys.readouterr().err
+
+
+def test_new_inputs_learn_their_scale_while_kept_ones_stay() -> None:
+    from retarget.learn.normalizer import RunningNormalizer
+
+    old = RunningNormalizer(2)
+    old.update(torch.tensor([[0.0, 10.0], [2.0, 30.0]]).repeat(5000, 1))  # mean 1, 20; var 1, 100
+    new = RunningNormalizer(3)
+    widen_normalizer(new, old.state_dict(), torch.tensor([1, -1, 0]), count=1000.0)
+    assert new.mean.tolist() == [20.0, 0.0, 1.0] and new.var.tolist() == [100.0, 0.0, 1.0]
+    assert float(new.count) == 1000.0
+    same = torch.tensor([[10.0, 2.0], [30.0, 0.0]]).repeat(500, 1)  # the kept inputs as before
+    batch = torch.stack([same[:, 0], torch.rand(1000) * 0.1, same[:, 1]], 1)
+    for _ in range(10):  # ten rollouts with a new height-map-like input (0-10 cm)
+        new.update(batch)
+    assert torch.allclose(new.mean[[0, 2]], torch.tensor([20.0, 1.0], dtype=torch.float64))
+    assert torch.allclose(new.var[[0, 2]], torch.tensor([100.0, 1.0], dtype=torch.float64))
+    assert abs(float(new.mean[1]) - 0.05 * 10 / 11) < 0.01
+    assert 1e-4 < float(new.var[1]) < 0.01  # its own scale, not the unit variance of a default
