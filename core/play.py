@@ -40,12 +40,15 @@ def render_rollout(
     height: int = 360,
     ghost_offset: float = 0.0,
     ghost: bool = True,
+    azimuth: float = 135.0,
+    elevation: float = -15.0,
 ) -> list[np.ndarray]:
     """Run ``policy`` in environment 0 from ``(clip, start)`` and render every control step.
 
     The ghost is the human reference motion (shifted sideways by ``ghost_offset`` metres,
     overlaid when 0; ``ghost=False`` hides it, e.g. when the devices come from a recording);
-    yellow boxes are the headset and controllers the policy was given.
+    yellow boxes are the headset and controllers the policy was given. The camera follows the
+    character from ``azimuth``/``elevation`` (degrees, world frame; 90 looks along +y).
     """
     model = env.world.model
     data = mujoco.MjData(model)
@@ -57,7 +60,7 @@ def render_rollout(
     cam.type = mujoco.mjtCamera.mjCAMERA_FREE
     # frame the character by its height at the start (Dino is 2.5 m, the human 1.75 m)
     top = float(env.sim.state.body_pos[0, :, 2].max())
-    cam.distance, cam.elevation, cam.azimuth = 4.0 * max(1.0, top / 1.8), -15.0, 135.0
+    cam.distance, cam.elevation, cam.azimuth = 4.0 * max(1.0, top / 1.8), elevation, azimuth
     shift = np.array([0.0, ghost_offset, 0.0])
     frames = []
     # the training world has only MuJoCo's default headlight, which renders dim: light the

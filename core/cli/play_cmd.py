@@ -32,6 +32,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--start", type=float, default=0.0, help="start time in the clip, s")
     parser.add_argument("--size", default="480x360", help="WIDTHxHEIGHT of each view")
     parser.add_argument("--ghost-offset", type=float, default=0.0, help="ghost shift, m")
+    parser.add_argument("--azimuth", type=float, default=135.0,
+                        help="camera direction, degrees in the world frame (90: along +y)")
+    parser.add_argument("--elevation", type=float, default=-15.0,
+                        help="camera elevation, degrees (negative: from above)")  # fmt: skip
     parser.add_argument(
         "--input",
         metavar="RECORDING",
@@ -88,6 +92,8 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             args.clip,
             start=start,
             seconds=args.seconds,
+            azimuth=args.azimuth,
+            elevation=args.elevation,
             width=width,
             height=height,
             ghost_offset=args.ghost_offset,

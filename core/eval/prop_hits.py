@@ -44,6 +44,30 @@ def prop_geoms(model: mujoco.MjModel) -> np.ndarray:
     return model.body_mocapid[root] >= 0
 
 
+def foot_prop_contacts(
+    model: mujoco.MjModel,
+    data: mujoco.MjData,
+    feet: np.ndarray,
+    props: np.ndarray,
+    newtons: float = HIT_NEWTONS,
+) -> list[tuple[int, bool]]:
+    """``(prop geom id, on top)`` of each foot-prop contact pushing harder than ``newtons``."""
+    n = data.ncon
+    if n == 0:
+        return []
+    geom = np.asarray(data.contact.geom[:n]).reshape(-1, 2)
+    pair = (feet[geom[:, 0]] & props[geom[:, 1]]) | (props[geom[:, 0]] & feet[geom[:, 1]])
+    found = []
+    force = np.zeros(6)
+    for i in np.nonzero(pair)[0]:  # the few foot-prop contacts only
+        mujoco.mj_contactForce(model, data, int(i), force)
+        if force[0] <= newtons:  # normal force, contact frame
+            continue
+        prop = int(geom[i, 1] if props[geom[i, 1]] else geom[i, 0])
+        found.append((prop, abs(float(data.contact.frame[i][2])) >= VERTICAL))
+    return found
+
+
 def foot_prop_hits(
     model: mujoco.MjModel,
     data: mujoco.MjData,
@@ -52,19 +76,5 @@ def foot_prop_hits(
     newtons: float = HIT_NEWTONS,
 ) -> tuple[bool, bool]:
     """``(top, side)`` of one simulation's current contacts (see the module doc)."""
-    n = data.ncon
-    if n == 0:
-        return False, False
-    geom = np.asarray(data.contact.geom[:n]).reshape(-1, 2)
-    pair = (feet[geom[:, 0]] & props[geom[:, 1]]) | (props[geom[:, 0]] & feet[geom[:, 1]])
-    top = side = False
-    force = np.zeros(6)
-    for i in np.nonzero(pair)[0]:  # the few foot-prop contacts only
-        mujoco.mj_contactForce(model, data, int(i), force)
-        if force[0] <= newtons:  # normal force, contact frame
-            continue
-        if abs(float(data.contact.frame[i][2])) >= VERTICAL:
-            top = True
-        else:
-            side = True
-    return top, side
+    tops = [top for _, top in foot_prop_contacts(model, data, feet, props, newtons)]
+    return any(tops), not all(tops)

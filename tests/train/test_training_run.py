@@ -268,7 +268,8 @@ def test_a_run_plays_in_another_scene_and_refuses_other_observations(
     assert chair, "the chair's bodies are in the compiled model"
     video = tmp_path / "chair.png"
     assert main(["play", str(run), "--scene", "chair", "--set", "scene.position=[1,0]",
-                 "--out", str(video), "--seconds", "0.3", "--size", "96x72"]) == 0  # fmt: skip
+                 "--out", str(video), "--seconds", "0.3", "--size", "96x72",
+                 "--azimuth", "90", "--elevation", "-5"]) == 0  # fmt: skip
     assert video.stat().st_size > 1000
 
     # a height map the policy never saw changes the observation: refused, naming the flag
