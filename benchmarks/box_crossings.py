@@ -54,10 +54,9 @@ def crossings(args: argparse.Namespace) -> list[dict]:
             clearance = foot_clearance(model, data, feet, props)
             over += np.isfinite(clearance)
             lowest = np.minimum(lowest, clearance)
-            for prop, top in env.sim.each_env(
-                lambda d: foot_prop_contacts(model, d, feet, props)
-            )[0]:
-                pushes[(prop, top)] += 1
+            touching = env.sim.each_env(lambda d: foot_prop_contacts(model, d, feet, props))[0]
+            for key in set(touching):  # control steps, not contact points
+                pushes[key] += 1
             if fell is None and float(env.sim.state.body_pos[0, :, 2].max()) < 0.5 * top0:
                 fell = t / hz
     mujoco.mj_kinematics(model, data)
