@@ -11,7 +11,8 @@ the character fell (body top below half its starting height). Usage::
         [--set scene.height=[0.05,0.25]]
 
 A box is *stepped over* when a foot passed above it with positive clearance and never pushed
-on it, *stepped on* when a foot pushed on its top, *hit* when a foot ran into a side.
+on it, *stepped on* when a foot pushed on its top (possibly grazing a side on the way), *hit a
+side* when a foot pushed only against a side (a stumble).
 """
 
 from __future__ import annotations
@@ -66,10 +67,14 @@ def crossings(args: argparse.Namespace) -> list[dict]:
     rows = []
     for k, g in enumerate(ids):
         top, side = pushes[(int(g), True)], pushes[(int(g), False)]
-        verdict = (
-            "hit" if side else "stepped on" if top else
-            "stepped over" if over[k] and lowest[k] > 0 else "not reached"
-        )  # fmt: skip
+        if top:
+            verdict = "stepped on" + (", grazed a side" if side else "")
+        elif side:
+            verdict = "hit a side" + (", foot over it" if over[k] else "")
+        elif over[k]:
+            verdict = "stepped over" if lowest[k] > 0 else "touched"
+        else:
+            verdict = "not reached"
         rows.append({"box": model.geom(g).name or str(g), "height": heights[k],
                      "over_steps": int(over[k]), "clearance": float(lowest[k]),
                      "top_steps": top, "side_steps": side, "verdict": verdict})  # fmt: skip
