@@ -23,6 +23,7 @@ from collections import defaultdict
 import mujoco
 import numpy as np
 import torch
+from rollout_args import add_rollout_args
 
 from retarget.eval.prop_clearance import foot_clearance
 from retarget.eval.prop_hits import foot_geoms, foot_prop_contacts, prop_geoms
@@ -83,10 +84,7 @@ def crossings(args: argparse.Namespace) -> list[dict]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("run")
-    parser.add_argument("--motions", help="clip file or directory (default: the run's own)")
-    parser.add_argument("--clip", type=int, default=0)
-    parser.add_argument("--seconds", type=float, default=8.0)
+    add_rollout_args(parser)
     parser.add_argument("--set", dest="assignments", action="append", default=[],
                         metavar="PATH=VALUE",
                         help="change the run's recipe, e.g. scene.height=[0.05,0.25]")  # fmt: skip

@@ -16,6 +16,7 @@ import argparse
 import mujoco
 import numpy as np
 import torch
+from rollout_args import add_rollout_args
 
 from retarget.loader import load_plugins
 from retarget.play import copy_env_pose
@@ -52,10 +53,7 @@ def follow(run: str, motions: str | None, clip: int, seconds: float) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("run")
-    parser.add_argument("--motions", help="clip file or directory (default: the run's own)")
-    parser.add_argument("--clip", type=int, default=0)
-    parser.add_argument("--seconds", type=float, default=8.0)
+    add_rollout_args(parser)
     args = parser.parse_args()
     follow(args.run, args.motions, args.clip, args.seconds)
 
