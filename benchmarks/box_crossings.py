@@ -25,7 +25,7 @@ import numpy as np
 import torch
 from rollout_args import add_rollout_args
 
-from retarget.eval.prop_clearance import foot_clearance
+from retarget.eval.prop_clearance import foot_clearance, world_boxes
 from retarget.eval.prop_hits import foot_geoms, foot_prop_contacts, prop_geoms
 from retarget.loader import load_plugins
 from retarget.play import copy_env_pose
@@ -61,8 +61,7 @@ def crossings(args: argparse.Namespace) -> list[dict]:
                 pushes[key] += 1
             if fell is None and float(env.sim.state.body_pos[0, :, 2].max()) < 0.5 * top0:
                 fell = t / hz
-    mujoco.mj_kinematics(model, data)
-    heights = [float(data.geom_xpos[g, 2] + model.geom_size[g, 2]) for g in ids]
+    heights = world_boxes(model, data, ids)[4]  # the boxes do not move
     ending = f"fell at {fell:.1f} s" if fell is not None else "no fall"
     print(f"{args.run}: {lib.names[args.clip]}, {steps / hz:.1f} s; {ending}")
     rows = []
@@ -76,7 +75,7 @@ def crossings(args: argparse.Namespace) -> list[dict]:
             verdict = "stepped over" if lowest[k] > 0 else "touched"
         else:
             verdict = "not reached"
-        rows.append({"box": model.geom(g).name or str(g), "height": heights[k],
+        rows.append({"box": model.geom(g).name or str(g), "height": float(heights[k]),
                      "over_steps": int(over[k]), "clearance": float(lowest[k]),
                      "top_steps": top, "side_steps": side, "verdict": verdict})  # fmt: skip
     return rows

@@ -37,17 +37,17 @@ def widen_module(module: nn.Module, old: Mapping[str, torch.Tensor], index: torc
         if key == first:
             known = index >= 0
             too_few = known.any() and int(index.max()) >= value.shape[1]
-            if value.shape[0] != new.shape[0] or too_few:
-                raise ValueError(
-                    f"'{key}' is {tuple(value.shape)} in the checkpoint, {tuple(new.shape)} here"
-                )
-            weight = torch.zeros_like(new)
-            weight[:, known] = value[:, index[known]].to(new.dtype)
-            value = weight
-        elif value.shape != new.shape:
+            fits = value.shape[0] == new.shape[0] and not too_few
+        else:
+            fits = value.shape == new.shape
+        if not fits:
             raise ValueError(
                 f"'{key}' is {tuple(value.shape)} in the checkpoint, {tuple(new.shape)} here"
             )
+        if key == first:
+            weight = torch.zeros_like(new)
+            weight[:, known] = value[:, index[known]].to(new.dtype)
+            value = weight
         merged[key] = value
     module.load_state_dict(merged)
 

@@ -18,6 +18,7 @@ from retarget.errors import RecipeError
 from retarget.kinds import Algorithm
 from retarget.registry import Registry
 from retarget.train.load import load_run
+from retarget.train.run_dir import LOCK
 
 INIT_FROM = "init_from.txt"  # in the new run's directory: the checkpoint it started from
 Layout = Mapping[str, Sequence[tuple[str, int]]]
@@ -92,7 +93,7 @@ def warm_start(
     except (ValueError, KeyError) as exc:
         raise RecipeError(
             f"cannot start from {old.checkpoint}: {exc}",
-            file=str(old.run / "recipe.lock.yaml"),
+            file=str(old.run / LOCK),
             field="algorithm",
             hint="the network sizes (algorithm.actor_hidden, critic_hidden) and the character "
             "(its action count) must match the source run",
