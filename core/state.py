@@ -36,6 +36,10 @@ class Layout:
     joint_weights: tuple[float, ...] = ()
     torque_limits: tuple[float, ...] = ()
     passive_joints: tuple[str, ...] = ()
+    # per actuator: the qpos address of the joint it drives and that joint's range (rad), so
+    # a plugin can turn joint angles into PD-target actions (retarget.sim.actuation)
+    actuator_qpos: tuple[int, ...] = ()
+    actuator_ranges: tuple[tuple[float, float], ...] = ()
 
     @property
     def nu(self) -> int:
@@ -126,11 +130,15 @@ class ReferenceBatch:
     window_offsets: tuple[int, ...]
     contacts: torch.Tensor  # (N, C) bool
     extras: Mapping[str, torch.Tensor] = field(default_factory=dict)
+    future: Mapping[int, SimState] = field(default_factory=dict)
+    """The reference state ``k`` frames ahead, for each offset ``k`` a sensor asked for with
+    :meth:`~retarget.kinds.Sensor.reference_offsets` (clamped at the clip's last frame)."""
 
     def select(self, idx: torch.Tensor) -> ReferenceBatch:
         return replace(
             self,
             pose=self.pose.select(idx),
+            future={k: v.select(idx) for k, v in self.future.items()},
             devices=self.devices[idx],
             contacts=self.contacts[idx],
             extras={k: v[idx] for k, v in self.extras.items()},

@@ -137,6 +137,7 @@ def layout_of(character: Character, model: mujoco.MjModel, body_names: tuple[str
     passive = tuple(character.passive_joints())
     nq, nv = _character_dofs(character, model, body_names)
     gear = np.asarray(model.actuator_gear[:, 0], dtype=float)
+    hinge = model.actuator_trnid[:, 0]
     return Layout(
         body_names=body_names,
         body_ids=tuple(mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, b) for b in body_names),
@@ -152,4 +153,7 @@ def layout_of(character: Character, model: mujoco.MjModel, body_names: tuple[str
         joint_weights=tuple(float(weights.get(j, 1.0)) for j in joints),
         torque_limits=tuple(float(g) for g in gear),
         passive_joints=passive,
+        actuator_qpos=tuple(int(model.jnt_qposadr[j]) for j in hinge),
+        actuator_ranges=tuple((float(model.jnt_range[j, 0]), float(model.jnt_range[j, 1]))
+                              for j in hinge),
     )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeRemainingColumn
@@ -11,7 +12,7 @@ from retarget.cli.console import out, warning
 from retarget.cli.recipe_cmd import add_recipe_flags, load_from_args
 from retarget.errors import RecipeError
 from retarget.registry import Registry
-from retarget.train.load import locked_recipe
+from retarget.train.load import locked_recipe, prepared_recipe
 from retarget.train.run_dir import (
     LOCK,
     default_run_name,
@@ -35,6 +36,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="start from another run's latest weights (a new run: its own recipe, fresh "
         "optimiser); inputs are matched by sensor/observer name, new observers start at zero "
         "weight",
+    )
+    parser.add_argument(
+        "--teacher",
+        metavar="RUN",
+        help="distil from a trained teacher run with DAgger (algorithm: {type: dagger, "
+        "teacher: RUN}); the teacher's sensors are added for it, the student's actor keeps "
+        "the recipe's own",
     )
     parser.add_argument("--runs-dir", default="runs", help="where run directories go")
     parser.add_argument("--num-envs", type=int, help="override env.num_envs")
@@ -64,9 +72,10 @@ def _resume_recipe(run: Path, registry: Registry):
 def run(args: argparse.Namespace, registry: Registry) -> int:
     if args.steps is None and args.minutes is None and args.resume is None:
         out.print("no --steps or --minutes given: training until Ctrl-C (checkpoint on exit)")
-    if args.resume and args.init_from:
+    if args.resume and (args.init_from or args.teacher):
         raise RecipeError(
-            "--resume continues a run with its own weights; --init-from starts a new one",
+            "--resume continues a run with its own weights and recipe; --init-from and "
+            "--teacher start a new one",
             hint="use one of them",
         )
     if args.resume:
@@ -79,10 +88,16 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             )
         resolved = _resume_recipe(run_dir, registry)
     else:
-        resolved = load_from_args(args, registry)
-        name = resolved.recipe.name or default_run_name(
-            resolved.character.entry.name, [c.entry.name for c in resolved.of_kind("sensor")]
-        )
+        if args.teacher:  # a shorthand: the same override a recipe line would make
+            teacher = json.dumps({"type": "dagger", "teacher": str(args.teacher)})
+            args.assignments = [f"algorithm={teacher}", *args.assignments]
+        resolved = prepared_recipe(load_from_args(args, registry), registry)
+        groups = resolved.recipe.env.groups or {}
+        seen = [  # the sensors the policy reads (a teacher's own are not in its name)
+            c.entry.name for c in resolved.of_kind("sensor")
+            if "actor" not in groups or c.entry.name in groups["actor"]
+        ]
+        name = resolved.recipe.name or default_run_name(resolved.character.entry.name, seen)
         run_dir = new_run_dir(args.runs_dir, name)
     trainer = Trainer(
         resolved,
@@ -91,6 +106,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         threads=args.threads,
         checkpoint_every=args.checkpoint_every,
         tensorboard=not args.no_tensorboard,
+        registry=registry,
     )
     if args.resume:
         ckpt = latest_checkpoint(run_dir)

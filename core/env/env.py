@@ -100,6 +100,7 @@ class RetargetEnv:
         past = max([s.frames_needed()[0] for s in self.sensors] + [0])
         future = max([s.frames_needed()[1] for s in self.sensors] + [0])
         self.window_offsets = tuple(range(-past, future + 1))
+        self.reference_offsets = self._reference_offsets()
         self._sources = self._observation_sources()
         self.groups = {k: list(v) for k, v in (opts.groups or self._default_groups()).items()}
         for group, names in self.groups.items():
@@ -126,6 +127,20 @@ class RetargetEnv:
             ("reference", "rewards", "terminations", "observations", "resets"), 0.0
         )
         self._ctx: StepContext | None = None
+
+    def _reference_offsets(self) -> tuple[int, ...]:
+        """Sorted union of the future frames sensors read the full reference at."""
+        wanted: set[int] = set()
+        for plugin in (*self.sensors, *self.observers):
+            offsets = tuple(plugin.reference_offsets())
+            bad = [k for k in offsets if not isinstance(k, int) or k < 1]
+            if bad:
+                raise PluginError(
+                    f"reference_offsets() returned {bad}; offsets are ints >= 1 (frames ahead)",
+                    plugin=f"{plugin.kind} {plugin.name}",
+                )
+            wanted.update(offsets)
+        return tuple(sorted(wanted))
 
     def _scene_mocap_ids(self) -> np.ndarray:
         """Indices into ``mocap_pos`` of the scene's props, resolved once; sizes the scene's
@@ -194,6 +209,13 @@ class RetargetEnv:
         rows = lib.rows(self.clip, self.frame)[:, 0]
         devices = lib.devices[lib.rows(self.clip, self.frame, self.window_offsets)]
         future = lib.rows(self.clip, self.frame, self.options.privileged_offsets)
+        ahead = {}
+        if self.reference_offsets:
+            ahead_rows = lib.rows(self.clip, self.frame, self.reference_offsets)
+            ahead = {
+                k: self.reference.pose(ahead_rows[:, i])
+                for i, k in enumerate(self.reference_offsets)
+            }
         ref = ReferenceBatch(
             pose=self.reference.pose(rows),
             devices=devices,
@@ -203,6 +225,7 @@ class RetargetEnv:
                 FUTURE_POS: self.reference.arrays["body_pos"][future],
                 SCENE_CONTACTS: self.reference.scene_contacts[rows],
             },
+            future=ahead,
         )
         return StepContext(
             layout=self.layout,

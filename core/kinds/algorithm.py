@@ -57,6 +57,21 @@ class Algorithm(Plugin):
     @abstractmethod
     def load_state_dict(self, state: Mapping[str, Any]) -> None: ...
 
+    def prepare_recipe(self, recipe: dict[str, Any], registry: Any) -> dict[str, Any]:
+        """Amend a new run's recipe before it is resolved and locked: ``recipe`` is the
+        resolved recipe as a plain dict (``ResolvedRecipe.to_dict``); return it, changed or
+        not. A distillation algorithm adds the sensors and the observation group its teacher
+        reads here, so that the run's ``recipe.lock.yaml`` states exactly what ran and the
+        run can be evaluated, resumed and exported without the teacher. Errors about the
+        recipe (a teacher of another character) are raised here, before anything is built.
+        The default changes nothing.
+        """
+        return recipe
+
+    def connect(self, registry: Any) -> None:
+        """Receive the invocation's plugin registry (``retarget.registry.Registry``) before
+        :meth:`setup`, for an algorithm that loads other runs (a teacher). Default: unused."""
+
     def warm_start(self, state: Mapping[str, Any], inputs: Mapping[str, torch.Tensor]) -> None:
         """Start from the learned weights of another run's checkpoint (``state``, what its
         ``state_dict`` returned) instead of from scratch: fine-tuning a flat-ground walker in a

@@ -50,6 +50,13 @@ class Plugin(ABC):
         return f"{type(self).__name__}({self.config!r})"
 
     @classmethod
+    def example(cls) -> Plugin:
+        """An instance the contract suite can exercise with nothing outside it: by default
+        the default config. A plugin whose config has required fields, or that needs files
+        only a user has (a teacher run), returns one that works without them."""
+        return cls()
+
+    @classmethod
     def summary(cls) -> str:
         """First line of the docstring: the one-line description in ``retarget plugins``."""
         doc = (cls.__doc__ or "").strip()

@@ -57,6 +57,15 @@ class Sensor(Plugin):
         """
         return (0, 0)
 
+    def reference_offsets(self) -> tuple[int, ...]:
+        """Frame offsets ``k >= 1`` at which this sensor reads the full reference state
+        (``ctx.ref.future[k]``): a teacher's target body, which no headset can provide.
+
+        The environment computes the union over all sensors once per step; the default asks
+        for none.
+        """
+        return ()
+
 
 class Observer(Sensor):
     """Base class of observers: scene perception (height maps, point clouds), batched."""

@@ -6,6 +6,7 @@ third-party algorithm can reuse any part of them.
 
 from __future__ import annotations
 
+from retarget.learn.columns import NamedColumns, source_columns
 from retarget.learn.config import PPOConfig
 from retarget.learn.networks import Critic, GaussianActor, mlp
 from retarget.learn.normalizer import GroupNormalizer, RunningNormalizer
@@ -16,11 +17,13 @@ __all__ = [
     "Critic",
     "GaussianActor",
     "GroupNormalizer",
+    "NamedColumns",
     "PPOConfig",
     "PPOLearner",
     "RolloutStorage",
     "RunningNormalizer",
     "gae",
     "mlp",
+    "source_columns",
     "torch_threads",
 ]

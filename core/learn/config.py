@@ -60,6 +60,17 @@ class PPOConfig(PluginConfig):
     collect_threads: int = Field(1, ge=0, description="torch threads while acting; 0: leave")
     update_threads: int = Field(2, ge=0, description="torch threads while updating; 0: leave")
     episode_window: int = Field(100, gt=0, description="finished episodes averaged in stats")
+    critic_warmup: int = Field(
+        0,
+        ge=0,
+        description="first iterations of a run in which only the critic learns: fine-tuning "
+        "a distilled student (--init-from), whose critic starts untrained",
+    )
+    residual: str | None = Field(
+        None,
+        description="an actor observation source (e.g. reference_action) whose raw values are "
+        "added to the network's output: the policy learns a residual around it",
+    )
 
     @property
     def init_std(self) -> float:

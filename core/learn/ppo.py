@@ -55,13 +55,22 @@ class DeployedPolicy(nn.Module):
     :meth:`PPOLearner.act` does at export time and later training does not change it.
     """
 
-    def __init__(self, normalizer: RunningNormalizer | None, net: nn.Module) -> None:
+    def __init__(
+        self,
+        normalizer: RunningNormalizer | None,
+        net: nn.Module,
+        residual: slice | None = None,
+    ) -> None:
         super().__init__()
         self.norm = copy.deepcopy(normalizer) if normalizer is not None else nn.Identity()
         self.net = copy.deepcopy(net)
+        self.base = (residual.start, residual.stop) if residual is not None else None
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
-        return self.net(self.norm(obs)).clamp(-1.0, 1.0)
+        out = self.net(self.norm(obs))
+        if self.base is not None:
+            out = out + obs[:, self.base[0] : self.base[1]]
+        return out.clamp(-1.0, 1.0)
 
 
 class PPOLearner:
@@ -74,8 +83,12 @@ class PPOLearner:
         action_dim: int,
         num_envs: int,
         generator: torch.Generator | None = None,
+        residual: slice | None = None,
     ) -> None:
+        """``residual``: columns of the raw actor observation added to the network's output
+        (the policy's actions are that base plus a learned, explored residual)."""
         self.config = c = config
+        self.residual = residual
         seed = torch.randint(0, 2**62, (1,), generator=generator).item()
         self.generator = torch.Generator().manual_seed(int(seed))
         if c.actor_group not in obs_dims:
@@ -128,16 +141,23 @@ class PPOLearner:
             v = v * self.value_norm.var.sqrt().float() + self.value_norm.mean.float()
         return v
 
+    def _base(self, raw_actor_obs: torch.Tensor) -> torch.Tensor | float:
+        """What the policy's output is added to: the residual source's raw columns, or 0."""
+        if self.residual is None:
+            return 0.0
+        return raw_actor_obs[:, self.residual].float()
+
     @torch.no_grad()
     def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
         """The deterministic policy (the Gaussian's mean) in [-1, 1]."""
-        x = self._normalize(self.actor_key, obs[self.actor_key].float())
-        return self.actor(x).clamp(-1.0, 1.0)
+        raw = obs[self.actor_key].float()
+        x = self._normalize(self.actor_key, raw)
+        return (self.actor(x) + self._base(raw)).clamp(-1.0, 1.0)
 
     def deployable_policy(self) -> nn.Module:
         """A frozen copy of :meth:`act` as one module (normaliser + mean network + clamp)."""
         norm = self.obs_norm.groups[self.actor_key] if self.config.normalize_obs else None
-        return DeployedPolicy(norm, self.actor.net).eval()
+        return DeployedPolicy(norm, self.actor.net, self.residual).eval()
 
     # ------------------------------------------------------------------ collection
 
@@ -146,8 +166,10 @@ class PPOLearner:
         c, st = self.config, self.storage
         if self.last_obs is None:
             self.last_obs = {k: v.float() for k, v in env.reset().items()}
-            if c.normalize_obs and int(self.obs_norm.groups[self.actor_key].count) == 0:
-                self.obs_norm.update(self.last_obs)
+            if c.normalize_obs:  # groups without statistics yet start from these
+                for key, norm in self.obs_norm.groups.items():
+                    if int(norm.count) == 0:
+                        norm.update(self.last_obs[key])
         obs = self.last_obs
         st.clear()
         finished_returns: list[torch.Tensor] = []
@@ -164,10 +186,12 @@ class PPOLearner:
             c_obs = self._normalize(self.critic_key, obs[self.critic_key])
             mean = self.actor(a_obs)
             noise = torch.randn(mean.shape, generator=self.generator)
-            action = mean + noise * std
+            action = mean + noise * std  # a residual when ``residual`` is set
             log_prob = self.actor.log_prob(mean, action)
             value = self._value(c_obs)
-            next_obs, reward, terminated, truncated, info = env.step(action)
+            next_obs, reward, terminated, truncated, info = env.step(
+                action + self._base(obs[self.actor_key])
+            )
             reward = reward.float()
             terminated, truncated = terminated.bool(), truncated.bool() & ~terminated.bool()
             bootstrap = None
@@ -267,7 +291,9 @@ class PPOLearner:
                     clipped = old + (value - old).clamp(-c.value_clip, c.value_clip)
                     value_loss = torch.max(value_loss, (clipped - target).square())
                 value_loss = value_loss.mean()
-                loss = policy_loss + c.value_loss_coef * value_loss
+                loss = c.value_loss_coef * value_loss
+                if self.iteration >= c.critic_warmup:  # else only the critic learns
+                    loss = loss + policy_loss
                 if c.entropy_coef:
                     loss = loss - c.entropy_coef * self.actor.entropy()
                 self.optimizer.zero_grad(set_to_none=True)
@@ -363,14 +389,20 @@ class PPOLearner:
     def warm_start(self, state: Mapping[str, Any], inputs: Mapping[str, torch.Tensor]) -> None:
         """Networks and observation statistics from another run's :meth:`state_dict`, input
         columns remapped by ``inputs`` (see :mod:`retarget.learn.widen`); the optimiser and
-        the counters start fresh, so this is a new run, not a resume."""
+        the counters start fresh, so this is a new run, not a resume.
+
+        A source without a critic (a distilled student) gives the actor only: the critic and
+        its statistics start fresh, which ``critic_warmup`` iterations then train alone."""
         widen_module(self.actor, state["actor"], inputs[self.actor_key])
-        widen_module(self.critic, state["critic"], inputs[self.critic_key])
+        if "critic" in state:
+            widen_module(self.critic, state["critic"], inputs[self.critic_key])
+            self.value_norm.load_state_dict(state["value_norm"])
         # the old statistics count as ten rollouts: new inputs find their scale in a few
         # iterations while the kept ones barely move
         count = 10.0 * self.config.rollout_steps * self.num_envs
         for key, norm in self.obs_norm.groups.items():
             old = sub_state(state["obs_norm"], f"groups.{key}")
+            if not old:  # a group the source never had: statistics from this run's data
+                continue
             widen_normalizer(norm, old, inputs[key], count)
-        self.value_norm.load_state_dict(state["value_norm"])
         self.last_obs = None

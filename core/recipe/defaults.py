@@ -5,6 +5,10 @@ whose bodies differ from a human's get their own column: ``--character dino`` wi
 file starts from ``dino.yaml`` (likewise ``oppy.yaml``), so the main command trains each body
 with the reward weights the paper gives it. A recipe file given by the user is always used as
 written.
+
+Named packaged recipes are used by name instead of a file: ``retarget train paper`` (the
+paper's torques and Table 3) or ``retarget train teacher --character dino`` (a full-body
+imitator); a character's own variant ``CHARACTER_NAME.yaml`` is preferred when it exists.
 """
 
 from __future__ import annotations
@@ -28,3 +32,21 @@ def default_recipe_path(character: str | None = None) -> Path:
     path = packaged_recipe("default")
     assert path is not None, "retarget.recipes/default.yaml is missing from the installation"
     return path
+
+
+def named_recipe(name: str, character: str | None = None) -> Path | None:
+    """The packaged recipe a bare name (no suffix, not a file) stands for, or None:
+    ``CHARACTER_NAME.yaml`` if it exists, else ``NAME.yaml``."""
+    if not name.isidentifier():
+        return None
+    if character:
+        own = packaged_recipe(f"{character}_{name}")
+        if own is not None:
+            return own
+    return packaged_recipe(name)
+
+
+def packaged_names() -> list[str]:
+    """Names of the packaged recipes (for error messages)."""
+    folder = Path(str(files("retarget.recipes")))
+    return sorted(p.stem for p in folder.glob("*.yaml"))

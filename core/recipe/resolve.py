@@ -170,13 +170,15 @@ def load(
     assignments: list[str] | tuple[str, ...] = (),
 ) -> ResolvedRecipe:
     """Read (or take the packaged default), override, validate and resolve a recipe."""
-    from retarget.recipe.defaults import default_recipe_path
+    from retarget.recipe.defaults import default_recipe_path, named_recipe
     from retarget.recipe.overrides import apply_overrides
     from retarget.recipe.source import read_recipe_file
 
+    character = (shorthands or {}).get("character")
     if path is None:
-        character = (shorthands or {}).get("character")
         path = default_recipe_path(character)
+    elif not Path(path).exists() and not Path(path).suffix:
+        path = named_recipe(str(path), character) or path
     source = read_recipe_file(path)
     source = apply_overrides(source, shorthands=shorthands, assignments=assignments)
     return resolve(source, registry)

@@ -93,7 +93,12 @@ def read_recipe_file(path: str | Path) -> RecipeSource:
     """Read a ``.yaml``/``.yml``/``.toml`` recipe; a missing or unreadable file is a RecipeError."""
     p = Path(path)
     if not p.exists():
-        raise RecipeError("recipe file not found", file=str(p))
+        from retarget.recipe.defaults import packaged_names
+
+        raise RecipeError(
+            "recipe file not found", file=str(p),
+            hint=f"packaged recipes by name: {', '.join(packaged_names())}",
+        )
     if p.is_dir():
         raise RecipeError("expected a recipe file, got a directory", file=str(p))
     if p.suffix.lower() not in {".yaml", ".yml", ".toml"}:

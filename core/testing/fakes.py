@@ -184,8 +184,10 @@ def fake_context(
     num_devices: int = 3,
     scene: Scene | None = None,
     dt: float = 1 / 36,
+    future_offsets: tuple[int, ...] = (1, 2, 3),
 ) -> StepContext:
-    """A random but valid step for ``num_envs`` environments of ``layout`` (default: tiny)."""
+    """A random but valid step for ``num_envs`` environments of ``layout`` (default: tiny);
+    ``future_offsets`` are the frames ahead whose full reference state ``ref.future`` holds."""
     if layout is None:
         layout = tiny_world().layout
     g = torch.Generator().manual_seed(seed)
@@ -205,6 +207,7 @@ def fake_context(
         window_offsets=window_offsets,
         contacts=torch.rand(num_envs, feet, generator=g) > 0.5,
         extras={SCENE_CONTACTS: torch.rand(num_envs, len(layout.body_groups), generator=g) > 0.5},
+        future={k: _fake_state(layout, num_envs, g) for k in sorted(set(future_offsets))},
     )
     return StepContext(
         layout=layout,

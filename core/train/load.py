@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,6 +34,25 @@ def locked_recipe(
     source = parse_text(yaml.safe_dump(data, sort_keys=False), str(run / LOCK), ".yaml")
     source = apply_overrides(source, shorthands={"scene": scene}, assignments=assignments)
     return resolve(source, registry), lock
+
+
+def prepared_recipe(resolved: ResolvedRecipe, registry: Registry) -> ResolvedRecipe:
+    """``resolved`` after its algorithm's :meth:`~retarget.kinds.Algorithm.prepare_recipe`
+    (e.g. a distillation run given its teacher's sensors), resolved again; unchanged when
+    the algorithm changes nothing."""
+    if "algorithm" not in resolved.components:
+        return resolved
+    algorithm = resolved.component("algorithm").instantiate()
+    assert isinstance(algorithm, Algorithm)
+    before = resolved.to_dict()
+    after = algorithm.prepare_recipe(copy.deepcopy(before), registry)
+    if after == before:
+        return resolved
+    source = resolved.source
+    text = yaml.safe_dump(after, sort_keys=False)
+    again = parse_text(text, source.path, ".yaml")
+    again.overrides.update(source.overrides)
+    return resolve(again, registry)
 
 
 @dataclass
@@ -70,6 +90,7 @@ def load_run(
     )
     algorithm = resolved.component("algorithm").instantiate()
     assert isinstance(algorithm, Algorithm)
+    algorithm.connect(registry)
     algorithm.setup(env)
     try:
         algorithm.load_state_dict(state["algorithm"])

@@ -25,6 +25,7 @@ from retarget.env.build import env_from_recipe
 from retarget.errors import RecipeError
 from retarget.kinds import Algorithm
 from retarget.recipe import ResolvedRecipe, write_lock
+from retarget.registry import Registry
 from retarget.train.logger import MetricsLogger
 from retarget.train.run_dir import CHECKPOINTS
 
@@ -71,6 +72,7 @@ class Trainer:
         threads: int | None = None,
         checkpoint_every: int = 10,
         tensorboard: bool = True,
+        registry: Registry | None = None,
     ) -> None:
         if "algorithm" not in resolved.components:
             raise RecipeError(
@@ -86,6 +88,8 @@ class Trainer:
         algorithm = resolved.component("algorithm").instantiate()
         assert isinstance(algorithm, Algorithm)
         self.algorithm = algorithm
+        if registry is not None:
+            self.algorithm.connect(registry)
         self.algorithm.setup(self.env, generator)
         self.progress = Progress()
         self.logger = MetricsLogger(run, tensorboard=tensorboard)

@@ -8,8 +8,8 @@ from typing import Any
 import torch
 
 import retarget
-from retarget import Algorithm, VecEnv
-from retarget.learn import PPOConfig, PPOLearner
+from retarget import Algorithm, PluginError, VecEnv
+from retarget.learn import PPOConfig, PPOLearner, source_columns
 
 
 class PPO(Algorithm):
@@ -30,8 +30,18 @@ class PPO(Algorithm):
 
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
         assert isinstance(self.config, PPOConfig)
+        residual = None
+        if self.config.residual is not None:
+            residual = source_columns(env, self.config.actor_group, self.config.residual)
+            if residual.stop - residual.start != env.action_dim:
+                raise PluginError(
+                    f"residual source '{self.config.residual}' has "
+                    f"{residual.stop - residual.start} columns, the action {env.action_dim}",
+                    plugin=self.name,
+                    field="algorithm.residual",
+                )
         self.learner = PPOLearner(
-            self.config, env.obs_dims, env.action_dim, env.num_envs, generator
+            self.config, env.obs_dims, env.action_dim, env.num_envs, generator, residual
         )
 
     def _ready(self) -> PPOLearner:

@@ -1,0 +1,312 @@
+"""Online distillation (DAgger): a student policy learns a frozen teacher's actions on the
+states the student itself visits (SimXR, Algorithm 1).
+
+Each iteration the *student* acts in the environment for ``rollout_steps`` steps (with a
+small exploration noise, and with probability ``beta`` per environment the teacher's action
+instead, early in training); the teacher labels every visited state from its own observation
+group of the same environment; the student then takes supervised steps on those labels (MSE
+on the action means, or the KL divergence of the two Gaussians). Supervised learning on a
+teacher's labels needs far fewer samples than learning the same behaviour by reward: that is
+the reason for this stage. Everything random draws from one private generator whose state is
+saved, so a resumed run continues bit for bit.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import time
+from collections import deque
+from collections.abc import Mapping
+from typing import Any, Literal
+
+import torch
+from pydantic import Field
+from torch import nn
+
+from retarget.kinds import PluginConfig, VecEnv
+from retarget.learn.networks import GaussianActor
+from retarget.learn.normalizer import GroupNormalizer
+from retarget.learn.ppo import DeployedPolicy, torch_threads
+
+
+class DaggerConfig(PluginConfig):
+    """DAgger settings; the student's network matches PPO's actor so that PPO can fine-tune a
+    distilled student with ``--init-from``."""
+
+    teacher: str = Field(
+        description="the teacher's run directory (runs/NAME/latest); its latest checkpoint "
+        "labels the student's states"
+    )
+    teacher_checkpoint: str | None = Field(
+        None,
+        description="checkpoint inside the teacher's run (set when the run starts: its "
+        "latest), so a resumed student keeps the same teacher",
+        pattern=r"^checkpoints/ckpt-[0-9]+\.pt$",
+    )
+    teacher_group: str = Field("teacher", description="observation group the teacher reads")
+    actor_group: str = Field("actor", description="observation group the student reads")
+    rollout_steps: int = Field(32, gt=0, le=10_000, description="steps per env per iteration")
+    learning_rate: float = Field(5e-4, gt=0)
+    epochs: int = Field(4, gt=0, le=1000, description="passes over the buffer per iteration")
+    minibatch_size: int = Field(2048, gt=0, description="samples per gradient step")
+    buffer_rollouts: int = Field(
+        1, ge=1, le=64, description="recent rollouts trained on (1: only the newest)"
+    )
+    loss: Literal["mse", "kl"] = Field(
+        "mse", description="mse on action means, or KL(teacher || student) of the Gaussians"
+    )
+    teacher_std: float = Field(0.141, gt=0, description="kl: the teacher's action std")
+    action_noise: float = Field(
+        0.05, ge=0, description="std of the noise added to the student's actions while "
+        "collecting (visits states around its own trajectory)"
+    )
+    beta: float = Field(0.0, ge=0, le=1, description="start probability the teacher acts")
+    beta_iterations: int = Field(
+        0, ge=0, description="iterations over which beta falls linearly to 0"
+    )
+    max_grad_norm: float = Field(1.0, gt=0)
+    activation: Literal["tanh", "elu", "relu"] = "tanh"
+    actor_hidden: tuple[int, ...] = (300, 200, 100)
+    obs_clip: float = Field(10.0, gt=0)
+    collect_threads: int = Field(1, ge=0, description="torch threads while acting; 0: leave")
+    update_threads: int = Field(2, ge=0, description="torch threads while updating; 0: leave")
+    episode_window: int = Field(100, gt=0, description="finished episodes averaged in stats")
+
+
+class DaggerLearner:
+    """Student network, normaliser, optimiser, label buffer and counters of one DAgger run."""
+
+    def __init__(
+        self,
+        config: DaggerConfig,
+        obs_dims: Mapping[str, int],
+        action_dim: int,
+        num_envs: int,
+        generator: torch.Generator | None = None,
+    ) -> None:
+        self.config = c = config
+        for group in (c.actor_group, c.teacher_group):
+            if group not in obs_dims:
+                raise ValueError(
+                    f"the env has no {group!r} observation group ({', '.join(obs_dims)}); a "
+                    "DAgger recipe is prepared with the teacher's group by `retarget train`"
+                )
+        seed = torch.randint(0, 2**62, (1,), generator=generator).item()
+        self.generator = torch.Generator().manual_seed(int(seed))
+        self.actor_key, self.teacher_key = c.actor_group, c.teacher_group
+        self.num_envs, self.action_dim = num_envs, action_dim
+        dim = int(obs_dims[self.actor_key])
+        self.actor = GaussianActor(
+            dim,
+            action_dim,
+            c.actor_hidden,
+            activation=c.activation,
+            init_std=c.teacher_std,
+            learn_std=c.loss == "kl",
+            generator=self.generator,
+        )
+        self.obs_norm = GroupNormalizer({self.actor_key: dim}, clip=c.obs_clip)
+        self.optimizer = torch.optim.Adam(self.actor.parameters(), lr=c.learning_rate)
+        size = c.buffer_rollouts * c.rollout_steps * num_envs
+        self.buffer_obs = torch.zeros(size, dim)
+        self.buffer_labels = torch.zeros(size, action_dim)
+        self.buffer_fill = 0  # rows of the buffer holding samples
+        self.buffer_next = 0  # next row to write
+        self.teacher: nn.Module | None = None
+        self.last_obs: dict[str, torch.Tensor] | None = None
+        self.episode_return = torch.zeros(num_envs)
+        self.episode_length = torch.zeros(num_envs, dtype=torch.long)
+        self.finished_returns: deque[float] = deque(maxlen=c.episode_window)
+        self.finished_lengths: deque[float] = deque(maxlen=c.episode_window)
+        self.iteration = 0
+        self.env_steps = 0
+
+    def set_teacher(self, teacher: nn.Module) -> None:
+        """The frozen policy that labels states: raw teacher-group observations -> actions."""
+        teacher = copy.deepcopy(teacher).eval()
+        for p in teacher.parameters():
+            p.requires_grad_(False)
+        self.teacher = teacher
+
+    # ------------------------------------------------------------------ acting
+
+    def _normalized(self, raw: torch.Tensor) -> torch.Tensor:
+        return self.obs_norm.group(self.actor_key, raw)
+
+    @torch.no_grad()
+    def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
+        """The student's deterministic action (its Gaussian's mean) in [-1, 1]."""
+        return self.actor(self._normalized(obs[self.actor_key].float())).clamp(-1.0, 1.0)
+
+    def deployable_policy(self) -> nn.Module:
+        """Normaliser + student mean network + clamp, frozen: needs no teacher at run time."""
+        return DeployedPolicy(self.obs_norm.groups[self.actor_key], self.actor.net).eval()
+
+    def beta(self) -> float:
+        """Probability that the teacher acts in an environment this iteration."""
+        c = self.config
+        if c.beta <= 0:
+            return 0.0
+        if c.beta_iterations == 0:
+            return c.beta
+        return c.beta * max(0.0, 1.0 - self.iteration / c.beta_iterations)
+
+    # ------------------------------------------------------------------ collection
+
+    @torch.no_grad()
+    def collect(self, env: VecEnv) -> dict[str, float]:
+        c = self.config
+        if self.teacher is None:
+            raise RuntimeError("DaggerLearner.set_teacher(policy) must be called first")
+        if self.last_obs is None:
+            self.last_obs = {k: v.float() for k, v in env.reset().items()}
+            if int(self.obs_norm.groups[self.actor_key].count) == 0:
+                self.obs_norm.update({self.actor_key: self.last_obs[self.actor_key]})
+        obs = self.last_obs
+        pending = GroupNormalizer({self.actor_key: self.buffer_obs.shape[1]})
+        teacher_acts = torch.rand(self.num_envs, generator=self.generator) < self.beta()
+        gap, finished_r, finished_l = 0.0, [], []
+        for _ in range(c.rollout_steps):
+            raw = obs[self.actor_key]
+            pending.update({self.actor_key: raw})
+            label = self.teacher(obs[self.teacher_key])
+            mean = self.actor(self._normalized(raw))
+            gap += float((mean.clamp(-1, 1) - label).square().mean())
+            noise = torch.randn(mean.shape, generator=self.generator) * c.action_noise
+            action = torch.where(teacher_acts[:, None], label, mean + noise)
+            self._store(raw, label)
+            next_obs, reward, terminated, truncated, _ = env.step(action)
+            self.episode_return += reward.float()
+            self.episode_length += 1
+            done = terminated.bool() | truncated.bool()
+            if done.any():
+                finished_r.append(self.episode_return[done].clone())
+                finished_l.append(self.episode_length[done].clone())
+                self.episode_return[done] = 0.0
+                self.episode_length[done] = 0
+            obs = {k: v.float() for k, v in next_obs.items()}
+        self.last_obs = obs
+        norm = self.obs_norm.groups[self.actor_key]
+        norm.merge(*pending.groups[self.actor_key].raw_stats())
+        if finished_r:
+            self.finished_returns.extend(torch.cat(finished_r).tolist())
+            self.finished_lengths.extend(torch.cat(finished_l).float().tolist())
+        return {
+            "action_gap": gap / c.rollout_steps,  # student vs teacher, on the student's states
+            "beta": self.beta(),
+            "episodes_finished": float(sum(len(r) for r in finished_r)),
+        }
+
+    def _store(self, raw: torch.Tensor, label: torch.Tensor) -> None:
+        n, size = raw.shape[0], self.buffer_obs.shape[0]
+        rows = (self.buffer_next + torch.arange(n)) % size
+        self.buffer_obs[rows] = raw
+        self.buffer_labels[rows] = label
+        self.buffer_next = int((self.buffer_next + n) % size)
+        self.buffer_fill = min(size, self.buffer_fill + n)
+
+    # ------------------------------------------------------------------ update
+
+    def loss(self, raw: torch.Tensor, label: torch.Tensor) -> torch.Tensor:
+        """Supervised loss of the student on raw observations against teacher actions."""
+        mean = self.actor(self._normalized(raw))
+        if self.config.loss == "mse":
+            return (mean - label).square().sum(-1).mean()
+        log_std = self.actor.log_std
+        t_var = self.config.teacher_std**2
+        kl = log_std - math.log(self.config.teacher_std) + (
+            t_var + (label - mean).square()
+        ) / (2 * (2 * log_std).exp()) - 0.5
+        return kl.sum(-1).mean()
+
+    def update(self) -> dict[str, float]:
+        c = self.config
+        total = self.buffer_fill
+        count = max(1, round(total / c.minibatch_size))
+        losses, n = 0.0, 0
+        for _ in range(c.epochs):
+            order = torch.randperm(total, generator=self.generator)
+            for idx in order.chunk(count):
+                loss = self.loss(self.buffer_obs[idx], self.buffer_labels[idx])
+                self.optimizer.zero_grad(set_to_none=True)
+                loss.backward()
+                nn.utils.clip_grad_norm_(self.actor.parameters(), c.max_grad_norm)
+                self.optimizer.step()
+                losses += float(loss.detach())
+                n += 1
+        return {"distill_loss": losses / n, "gradient_steps": float(n)}
+
+    def train_iteration(self, env: VecEnv) -> dict[str, float]:
+        """Collect ``rollout_steps`` steps with the student acting, then learn the labels."""
+        c = self.config
+        samples = c.rollout_steps * self.num_envs
+        with torch_threads(c.collect_threads):
+            t0 = time.perf_counter()
+            stats = self.collect(env)
+            t1 = time.perf_counter()
+        with torch_threads(c.update_threads):
+            stats.update(self.update())
+            t2 = time.perf_counter()
+        self.iteration += 1
+        self.env_steps += samples
+        stats["collect_steps_per_s"] = samples / max(t1 - t0, 1e-9)
+        stats["update_samples_per_s"] = samples / max(t2 - t1, 1e-9)
+        stats["collect_seconds"], stats["update_seconds"] = t1 - t0, t2 - t1
+        if self.finished_returns:
+            stats["episode_return"] = sum(self.finished_returns) / len(self.finished_returns)
+            stats["episode_length"] = sum(self.finished_lengths) / len(self.finished_lengths)
+        return stats
+
+    # ------------------------------------------------------------------ checkpoints
+
+    def state_dict(self) -> dict[str, Any]:
+        """Everything a bit-exact resume needs (the teacher is reloaded from its run)."""
+        keep = self.config.buffer_rollouts > 1  # with one rollout the buffer is refilled first
+        return {
+            "actor": self.actor.state_dict(),
+            "obs_norm": self.obs_norm.state_dict(),
+            "optimizer": self.optimizer.state_dict(),
+            "generator": self.generator.get_state(),
+            "buffer": {
+                "obs": self.buffer_obs.clone() if keep else None,
+                "labels": self.buffer_labels.clone() if keep else None,
+                "fill": self.buffer_fill if keep else 0,
+                "next": self.buffer_next if keep else 0,
+            },
+            "last_obs": None
+            if self.last_obs is None
+            else {k: v.clone() for k, v in self.last_obs.items()},
+            "episode_return": self.episode_return.clone(),
+            "episode_length": self.episode_length.clone(),
+            "finished_returns": list(self.finished_returns),
+            "finished_lengths": list(self.finished_lengths),
+            "iteration": self.iteration,
+            "env_steps": self.env_steps,
+        }
+
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        self.actor.load_state_dict(state["actor"])
+        self.obs_norm.load_state_dict(state["obs_norm"])
+        self.optimizer.load_state_dict(state["optimizer"])
+        self.generator.set_state(state["generator"])
+        buffer = state["buffer"]
+        if buffer["obs"] is not None and buffer["obs"].shape == self.buffer_obs.shape:
+            self.buffer_obs.copy_(buffer["obs"])
+            self.buffer_labels.copy_(buffer["labels"])
+            self.buffer_fill, self.buffer_next = int(buffer["fill"]), int(buffer["next"])
+        else:
+            self.buffer_fill = self.buffer_next = 0
+        last = state["last_obs"]
+        self.last_obs = None if last is None else {k: v.clone() for k, v in last.items()}
+        if state["episode_return"].shape[0] == self.num_envs:
+            self.episode_return = state["episode_return"].clone()
+            self.episode_length = state["episode_length"].clone()
+        else:  # evaluation with another env count: only the policy matters
+            self.last_obs = None
+        self.finished_returns.clear()
+        self.finished_returns.extend(state["finished_returns"])
+        self.finished_lengths.clear()
+        self.finished_lengths.extend(state["finished_lengths"])
+        self.iteration = int(state["iteration"])
+        self.env_steps = int(state["env_steps"])

@@ -1,0 +1,229 @@
+"""DAgger distillation as an algorithm plugin: a student learns a trained teacher's actions.
+
+``algorithm: {type: dagger, teacher: runs/human-teacher/latest}`` (or ``retarget train
+--sensors three_point --teacher RUN``). Before the run starts, :meth:`Dagger.prepare_recipe`
+reads the teacher's ``recipe.lock.yaml``: the teacher must be the same character with the
+same physics (control rate, substeps, actuation and PD gains), else the run is refused naming
+both; the teacher's sensors and observers are added to the student's recipe and its actor
+inputs become the ``teacher`` observation group, while the student's ``actor`` group keeps
+the student's own sensors. The locked recipe therefore says exactly what ran, and the
+student evaluates, resumes and exports (ONNX) without the teacher.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any
+
+import torch
+import yaml
+
+import retarget
+from retarget import Algorithm, PluginError, RecipeError, VecEnv
+from retarget.learn.dagger import DaggerConfig, DaggerLearner
+from retarget.motion.procedural import idle_clip
+from retarget.train.load import load_run
+from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
+
+PHYSICS = ("control_hz", "substeps", "actuation", "pd_saturation", "pd_damping")
+"""Simulation settings a teacher's actions depend on: they must match the student's."""
+
+
+def _names(components: list[Any]) -> list[str]:
+    return [c["type"] if isinstance(c, dict) else str(c) for c in components]
+
+
+def _actor_sources(recipe: Mapping[str, Any], group: str = "actor") -> list[str]:
+    """The sources of a recipe's actor group (its explicit groups or the default one)."""
+    groups = (recipe.get("env") or {}).get("groups")
+    if groups:
+        if group not in groups:
+            raise RecipeError(f"the recipe has no observation group '{group}'",
+                              field="env.groups")
+        return list(groups[group])
+    return [*_names(recipe.get("sensors", [])), "proprio", *_names(recipe.get("observers", []))]
+
+
+class Dagger(Algorithm):
+    """Online distillation (DAgger): the student acts, a frozen teacher run labels its states.
+
+    The student reads the ``actor`` group (e.g. headset + controllers), the teacher its own
+    ``teacher`` group (e.g. the full reference body) of the same environment. Loss: MSE on
+    the action means (or the Gaussians' KL); ``beta`` lets the teacher act early on.
+    """
+
+    name = "dagger"
+    Config = DaggerConfig
+
+    def __init__(
+        self,
+        config: DaggerConfig | None = None,
+        teacher: Callable[[int, int], torch.nn.Module] | None = None,
+    ) -> None:
+        """``teacher``: builds the labelling policy from (teacher input width, action count)
+        instead of loading the configured run (tests, teachers that are not runs)."""
+        super().__init__(config)
+        self.learner: DaggerLearner | None = None
+        self.registry: Any = None
+        self._teacher_factory = teacher
+
+    @classmethod
+    def example(cls) -> Dagger:
+        """Distils a fixed linear teacher reading the ``critic`` group: no teacher run."""
+
+        def linear(width: int, actions: int) -> torch.nn.Module:
+            layer = torch.nn.Linear(width, actions)
+            g = torch.Generator().manual_seed(0)
+            with torch.no_grad():
+                layer.weight.copy_(torch.randn(actions, width, generator=g) * 0.3)
+                layer.bias.zero_()
+            return torch.nn.Sequential(layer, torch.nn.Tanh())
+
+        return cls(DaggerConfig(teacher="example", teacher_group="critic"), teacher=linear)
+
+    # ------------------------------------------------------------------ the recipe
+
+    def prepare_recipe(self, recipe: dict[str, Any], registry: Any) -> dict[str, Any]:
+        c = self.config
+        assert isinstance(c, DaggerConfig)
+        run = resolve_run(c.teacher)
+        lock_file = run / LOCK
+        try:
+            teacher = yaml.safe_load(lock_file.read_text(encoding="utf-8"))
+        except (OSError, yaml.YAMLError) as exc:
+            raise RecipeError(f"cannot read the teacher's recipe: {exc}",
+                              file=str(lock_file)) from None
+        if not isinstance(teacher, dict) or "character" not in teacher:
+            raise RecipeError("not a run's recipe (no character)", file=str(lock_file))
+        self._check_match(recipe, teacher, lock_file)
+        recipe = dict(recipe)
+        student_actor = _actor_sources(recipe, c.actor_group)
+        teacher_actor = _actor_sources(teacher)
+        for slot in ("sensors", "observers"):
+            mine = list(recipe.get(slot) or [])
+            have = {n: comp for n, comp in zip(_names(mine), mine, strict=True)}
+            for comp in teacher.get(slot) or []:
+                name = _names([comp])[0]
+                if name not in teacher_actor:
+                    continue
+                if name in have and have[name] != comp:
+                    raise RecipeError(
+                        f"{slot[:-1]} '{name}' is configured differently from the teacher's "
+                        f"({comp} in {lock_file}, {have[name]} here)",
+                        field=slot,
+                        hint="use the teacher's settings for a sensor both read",
+                    )
+                if name not in have:
+                    mine.append(comp)
+            recipe[slot] = mine
+        env = dict(recipe.get("env") or {})
+        groups = dict(env.get("groups") or {})
+        groups[c.actor_group] = student_actor
+        groups[c.teacher_group] = teacher_actor
+        env["groups"] = groups
+        recipe["env"] = env
+        algorithm = dict(recipe["algorithm"])
+        algorithm["teacher"] = str(run)  # the directory itself, not a moving 'latest' link
+        if not algorithm.get("teacher_checkpoint"):  # the weights of now, if it trains on
+            algorithm["teacher_checkpoint"] = str(latest_checkpoint(run).relative_to(run))
+        recipe["algorithm"] = algorithm
+        return recipe
+
+    @staticmethod
+    def _check_match(student: Mapping[str, Any], teacher: Mapping[str, Any], lock: Path) -> None:
+        def character(r: Mapping[str, Any]) -> Any:
+            ch = r["character"]
+            return ch if isinstance(ch, dict) else {"type": ch}
+
+        mine, theirs = character(student), character(teacher)
+        if mine.get("type") != theirs.get("type") or {
+            k: v for k, v in mine.items() if k in theirs
+        } != {k: v for k, v in theirs.items() if k in mine}:
+            raise RecipeError(
+                f"the teacher drives character {theirs}, this recipe {mine}",
+                file=str(lock),
+                field="character",
+                hint="distil from a teacher trained on the same character and settings",
+            )
+        sim_s, sim_t = student.get("sim") or {}, teacher.get("sim") or {}
+        for key in PHYSICS:
+            if key in sim_s and key in sim_t and sim_s[key] != sim_t[key]:
+                raise RecipeError(
+                    f"the teacher ran with sim.{key}={sim_t[key]}, this recipe with "
+                    f"sim.{key}={sim_s[key]}: the teacher's actions mean something else here",
+                    file=str(lock),
+                    field=f"sim.{key}",
+                    hint=f"--set sim.{key}={sim_t[key]}",
+                )
+
+    # ------------------------------------------------------------------ training
+
+    def connect(self, registry: Any) -> None:
+        self.registry = registry
+
+    def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
+        assert isinstance(self.config, DaggerConfig)
+        try:
+            self.learner = DaggerLearner(
+                self.config, env.obs_dims, env.action_dim, env.num_envs, generator
+            )
+        except ValueError as exc:
+            raise PluginError(str(exc), plugin=self.name) from None
+        self._teacher_dim = int(env.obs_dims[self.config.teacher_group])
+        if self._teacher_factory is not None:
+            self.learner.set_teacher(self._teacher_factory(self._teacher_dim, env.action_dim))
+
+    def _ready(self) -> DaggerLearner:
+        if self.learner is None:
+            raise RuntimeError("dagger: setup(env) must be called first")
+        return self.learner
+
+    def _load_teacher(self) -> None:
+        """The teacher run's deployable policy, loaded once, when training starts (acting,
+        evaluating and exporting a student never need it)."""
+        if self.registry is None:
+            raise PluginError(
+                "needs the plugin registry to load its teacher run", plugin=self.name,
+                hint="the trainer calls connect(registry) before setup",
+            )
+        run = resolve_run(self.config.teacher)
+        ckpt = self.config.teacher_checkpoint
+        teacher = load_run(
+            run, self.registry, num_envs=1, clips=[idle_clip(1.0)],
+            checkpoint=run / ckpt if ckpt else None,
+        )
+        group, policy = teacher.algorithm.policy()
+        width = int(teacher.env.obs_dims[group])
+        if width != self._teacher_dim:
+            raise PluginError(
+                f"the teacher's '{group}' input has {width} columns, this environment's "
+                f"'{self.config.teacher_group}' group {self._teacher_dim}",
+                plugin=self.name,
+                hint="the student's recipe must add the teacher's sensors unchanged",
+            )
+        self._ready().set_teacher(policy)
+
+    def train_iteration(self, env: VecEnv) -> dict[str, float]:
+        learner = self._ready()
+        if learner.teacher is None:
+            self._load_teacher()
+        return learner.train_iteration(env)
+
+    def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
+        return self._ready().act(obs)
+
+    def policy(self) -> tuple[str, torch.nn.Module]:
+        learner = self._ready()
+        return learner.actor_key, learner.deployable_policy()
+
+    def state_dict(self) -> dict[str, Any]:
+        return self._ready().state_dict()
+
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        self._ready().load_state_dict(state)
+
+
+@retarget.hookimpl
+def register_algorithms(register) -> None:
+    register(Dagger)

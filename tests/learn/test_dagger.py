@@ -1,0 +1,186 @@
+"""Teacher and student: a full-body residual imitator, DAgger distillation into sparse sensors,
+exact resume, ONNX parity, a PPO fine-tune of the student, and mismatched teachers refused."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+import yaml
+from helpers import TINY, assert_state_equal
+
+from retarget.cli.main import main
+from retarget.learn.dagger import DaggerConfig, DaggerLearner
+from retarget.loader import load_plugins
+from retarget.recipe import load
+from retarget.train.load import load_run, prepared_recipe
+from retarget.train.run_dir import new_run_dir
+from retarget.train.runner import Budget, Trainer
+
+SAMPLES = 4 * 8  # TINY: 4 envs x 8 rollout steps
+
+TEACHER = (
+    TINY.replace("name: tiny", "name: teacher")
+    .replace("sensors: [three_point]", "sensors: [full_body, reference_action]")
+    .replace("  type: ppo\n", "  type: ppo\n  residual: reference_action\n")
+    .replace("sim: {threads: 1}", "sim: {threads: 1, actuation: pd}")
+)
+STUDENT = (
+    TINY.replace("name: tiny", "name: student")
+    .replace("sim: {threads: 1}", "sim: {threads: 1, actuation: pd}")
+)
+STUDENT_DAGGER = """\
+  rollout_steps: 8
+  actor_hidden: [32]
+  minibatch_size: 16
+  epochs: 2
+"""
+
+
+@pytest.fixture(scope="module")
+def teacher(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    root = tmp_path_factory.mktemp("teacher")
+    recipe = root / "teacher.yaml"
+    recipe.write_text(TEACHER)
+    assert main(["train", str(recipe), "--steps", str(2 * SAMPLES), "--runs-dir", str(root),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    return root / "teacher" / "latest"
+
+
+def student_recipe(tmp: Path, teacher: Path, extra: str = "") -> Path:
+    """The tiny student recipe distilling from ``teacher`` with small networks."""
+    text = STUDENT.split("algorithm:")[0] + (
+        f"algorithm:\n  type: dagger\n  teacher: {teacher}\n{STUDENT_DAGGER}{extra}"
+        + "env: {num_envs: 4}\nsim: {threads: 1, actuation: pd}\n"
+    )
+    path = tmp / "student.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_untrained_residual_teacher_acts_as_the_reference(teacher: Path) -> None:
+    run = load_run(teacher, load_plugins(), num_envs=4)
+    obs = run.env.reset()
+    cols = run.algorithm.learner.residual  # type: ignore[attr-defined]
+    base = obs["actor"][:, cols]
+    assert base.abs().max() > 0.05, "the reference's joint targets are not all zero"
+    act = run.algorithm.act(obs)
+    assert (act - base.clamp(-1, 1)).abs().max() < 0.1, "a barely trained residual stays small"
+    group, policy = run.algorithm.policy()
+    assert torch.allclose(policy(obs[group]), act, atol=1e-6)
+
+
+def test_cli_teacher_shorthand_writes_an_explicit_recipe(teacher: Path, tmp_path: Path) -> None:
+    recipe = tmp_path / "s.yaml"
+    recipe.write_text(STUDENT)
+    assert main(["train", str(recipe), "--teacher", str(teacher), "--steps", str(SAMPLES),
+                 "--runs-dir", str(tmp_path), "--no-tensorboard"]) == 0  # fmt: skip
+    lock = yaml.safe_load((tmp_path / "student" / "latest" / "recipe.lock.yaml").read_text())
+    assert lock["algorithm"]["type"] == "dagger"
+    assert lock["algorithm"]["teacher"] == str(teacher.resolve())  # not the moving 'latest'
+    assert lock["algorithm"]["teacher_checkpoint"].startswith("checkpoints/ckpt-")
+    assert lock["env"]["groups"]["actor"] == ["three_point", "proprio"]
+    assert lock["env"]["groups"]["teacher"] == ["full_body", "reference_action", "proprio"]
+    assert [s["type"] for s in lock["sensors"]] == ["three_point", "full_body", "reference_action"]
+
+
+def test_student_learns_resumes_exactly_and_needs_no_teacher(
+    teacher: Path, tmp_path: Path
+) -> None:
+    registry = load_plugins()
+    resolved = prepared_recipe(load(str(student_recipe(tmp_path, teacher)), registry), registry)
+
+    def trainer(name: str) -> Trainer:
+        return Trainer(resolved, new_run_dir(tmp_path, name), checkpoint_every=2,
+                       tensorboard=False, registry=registry)  # fmt: skip
+
+    straight = trainer("straight")
+    straight.train(Budget(steps=4 * SAMPLES))
+    assert float(straight.progress.last["distill_loss"]) >= 0
+    half = trainer("half")
+    half.train(Budget(steps=2 * SAMPLES))
+    again = trainer("again")
+    again.restore(half.run / "checkpoints" / "ckpt-0000002.pt")
+    again.train(Budget(steps=4 * SAMPLES))
+    assert_state_equal(again.algorithm.state_dict(), straight.algorithm.state_dict(), "student")
+
+    # evaluating and exporting the student never loads the teacher: move the teacher away
+    moved = teacher.resolve().with_name("gone")
+    teacher.resolve().rename(moved)
+    try:
+        run = load_run(straight.run, registry, num_envs=2)
+        obs = run.env.reset()
+        assert run.algorithm.act(obs).shape == (2, run.env.action_dim)
+        ort = pytest.importorskip("onnxruntime")
+        assert main(["export", str(straight.run), "--onnx"]) == 0
+        onnx_path = straight.run / "export" / "policy.onnx"
+        meta = json.loads(onnx_path.with_suffix(".json").read_text())
+        assert meta["obs_dim"] == run.env.obs_dims["actor"]
+        batch = obs["actor"].float()
+        batch = torch.cat([batch, batch + 30 * torch.randn(batch.shape)])
+        (got,) = ort.InferenceSession(str(onnx_path)).run(None, {"obs": batch.numpy()})
+        np.testing.assert_allclose(got, run.algorithm.act({"actor": batch}).numpy(), atol=1e-5)
+    finally:
+        moved.rename(teacher.resolve())
+
+
+def test_student_loss_falls_on_a_fixed_batch() -> None:
+    config = DaggerConfig(teacher="unused", actor_hidden=(64,), learning_rate=3e-3)
+    learner = DaggerLearner(config, {"actor": 12, "teacher": 5}, 3, num_envs=8,
+                            generator=torch.Generator().manual_seed(0))  # fmt: skip
+    g = torch.Generator().manual_seed(1)
+    obs = torch.randn(256, 12, generator=g) * 3 + 1
+    labels = torch.tanh(obs[:, :3] * 0.5 - obs[:, 3:6] * 0.3)
+    learner.obs_norm.update({"actor": obs})
+    first = float(learner.loss(obs, labels).detach())
+    for _ in range(200):
+        loss = learner.loss(obs, labels)
+        learner.optimizer.zero_grad()
+        loss.backward()
+        learner.optimizer.step()
+    assert float(learner.loss(obs, labels).detach()) < 0.1 * first
+
+    kl = DaggerLearner(config.model_copy(update={"loss": "kl"}), {"actor": 12, "teacher": 5}, 3,
+                       num_envs=8)  # fmt: skip
+    assert kl.actor.log_std.requires_grad, "the KL loss learns the student's spread"
+    assert float(kl.loss(obs, labels).detach()) > 0
+
+
+def test_mismatched_teacher_is_refused_naming_both(
+    teacher: Path, tmp_path: Path, capsys
+) -> None:
+    recipe = student_recipe(tmp_path, teacher)
+    rc = main(["train", str(recipe), "--character", "jesse", "--steps", "8",
+               "--runs-dir", str(tmp_path)])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc != 0 and "human" in err and "jesse" in err and "teacher" in err
+    rc = main(["train", str(recipe), "--set", "sim.actuation=torque", "--steps", "8",
+               "--runs-dir", str(tmp_path)])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc != 0 and "sim.actuation=pd" in err and "sim.actuation=torque" in err
+    rc = main(["train", str(recipe), "--set", f"algorithm.teacher={tmp_path}", "--steps", "8",
+               "--runs-dir", str(tmp_path)])  # fmt: skip
+    assert rc != 0 and "not a run directory" in capsys.readouterr().err
+
+
+def test_ppo_fine_tunes_a_distilled_student(teacher: Path, tmp_path: Path) -> None:
+    recipe = student_recipe(tmp_path, teacher)
+    assert main(["train", str(recipe), "--steps", str(2 * SAMPLES), "--runs-dir", str(tmp_path),
+                 "--no-tensorboard", "--set", "algorithm.actor_hidden=[32]"]) == 0  # fmt: skip
+    student = tmp_path / "student" / "latest"
+    ppo = tmp_path / "ppo.yaml"
+    ppo.write_text(STUDENT.replace("name: student", "name: tuned").replace(
+        "  type: ppo\n", "  type: ppo\n  critic_warmup: 1\n"))  # fmt: skip
+    assert main(["train", str(ppo), "--init-from", str(student), "--steps", str(2 * SAMPLES),
+                 "--runs-dir", str(tmp_path), "--no-tensorboard"]) == 0  # fmt: skip
+    registry = load_plugins()
+    tuned = load_run(tmp_path / "tuned" / "latest", registry, num_envs=4,
+                     checkpoint=tmp_path / "tuned" / "latest" / "checkpoints" / "ckpt-0000000.pt")
+    source = load_run(student, registry, num_envs=4)
+    obs = tuned.env.reset()
+    # the fine-tune starts as the student acts: same actor inputs, same weights
+    assert torch.allclose(tuned.algorithm.act(obs), source.algorithm.act({"actor": obs["actor"]}),
+                          atol=1e-5)  # fmt: skip
