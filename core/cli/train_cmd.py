@@ -57,8 +57,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
 
 
-def _resume_recipe(run: Path, registry: Registry):
-    resolved, lock = locked_recipe(run, registry)
+def _resume_recipe(run: Path, registry: Registry, threads: int | None):
+    """The run's locked recipe; ``--threads`` (only the speed changes) is recorded in it."""
+    changes = [f"sim.threads={threads}"] if threads is not None else []
+    resolved, lock = locked_recipe(run, registry, assignments=changes)
     for path, info in lock.get("plugins", {}).items():
         comp = resolved.components.get(path)
         if comp is not None and comp.entry.version != info.get("version"):
@@ -86,11 +88,24 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
                 "recipe files and --set do not apply",
                 file=str(run_dir / LOCK),
             )
-        resolved = _resume_recipe(run_dir, registry)
+        if args.num_envs is not None:
+            raise RecipeError(
+                "--resume continues with the run's own environment count",
+                file=str(run_dir / LOCK),
+                hint="drop --num-envs (a checkpoint holds every environment's state)",
+            )
+        resolved = _resume_recipe(run_dir, registry, args.threads)
     else:
-        if args.teacher:  # a shorthand: the same override a recipe line would make
+        # shorthands are recipe overrides, so recipe.lock.yaml records exactly what ran
+        flags = []
+        if args.teacher:
             teacher = json.dumps({"type": "dagger", "teacher": str(args.teacher)})
-            args.assignments = [f"algorithm={teacher}", *args.assignments]
+            flags.append(f"algorithm={teacher}")
+        if args.num_envs is not None:
+            flags.append(f"env.num_envs={args.num_envs}")
+        if args.threads is not None:
+            flags.append(f"sim.threads={args.threads}")
+        args.assignments = [*flags, *args.assignments]
         resolved = prepared_recipe(load_from_args(args, registry), registry)
         groups = resolved.recipe.env.groups or {}
         seen = [  # the sensors the policy reads (a teacher's own are not in its name)
@@ -102,8 +117,6 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     trainer = Trainer(
         resolved,
         run_dir,
-        num_envs=args.num_envs,
-        threads=args.threads,
         checkpoint_every=args.checkpoint_every,
         tensorboard=not args.no_tensorboard,
         registry=registry,

@@ -3,11 +3,39 @@
 from __future__ import annotations
 
 from retarget.env.env import EnvOptions, RetargetEnv
-from retarget.kinds import Character, Observer, RewardTerm, Scene, Sensor, Termination
+from retarget.kinds import (
+    Character,
+    MotionFormat,
+    Observer,
+    RewardTerm,
+    Scene,
+    Sensor,
+    Termination,
+)
 from retarget.motion.clip import MotionClip
 from retarget.motion.sources import load_motions
 from retarget.recipe import ResolvedRecipe
+from retarget.registry import Registry
 from retarget.sim import SimSettings
+
+
+def motion_formats(
+    resolved: ResolvedRecipe, registry: Registry | None
+) -> dict[str, MotionFormat] | None:
+    """The readers of a recipe's motions: only the ``motions.format`` component, exactly as
+    configured, else every registered format with its defaults (each file read by the one
+    whose suffix it has); None without a registry (the installed plugins are looked up)."""
+    if "motions.format" in resolved.components:
+        comp = resolved.component("motions.format")
+        fmt = comp.instantiate()
+        assert isinstance(fmt, MotionFormat)
+        return {comp.entry.name: fmt}
+    if registry is None:
+        return None
+    return {
+        name: registry.get("motion_format", name).cls()  # type: ignore[misc]
+        for name in registry.names("motion_format")
+    }
 
 
 def env_from_recipe(
@@ -18,12 +46,14 @@ def env_from_recipe(
     motions: str | None = None,
     clips: list[MotionClip] | None = None,
     terminations: bool = True,
+    registry: Registry | None = None,
 ) -> RetargetEnv:
     """Instantiate every component of ``resolved``, load its motions and build the env.
 
     ``motions`` replaces the recipe's motion path (evaluation on other clips), ``clips``
     gives the clips themselves (already loaded or generated);
-    ``terminations=False`` keeps only clip ends (evaluation follows runs through failures).
+    ``terminations=False`` keeps only clip ends (evaluation follows runs through failures);
+    ``registry`` is the invocation's plugins (motion formats come from it).
     """
     recipe = resolved.recipe
 
@@ -60,7 +90,10 @@ def env_from_recipe(
         groups=recipe.env.groups,
     )
     if clips is None:
-        clips = load_motions(motions if motions is not None else recipe.motions.path)
+        clips = load_motions(
+            motions if motions is not None else recipe.motions.path,
+            motion_formats(resolved, registry),
+        )
     sensors: list[Sensor] = made("sensor")
     observers: list[Observer] = made("observer")
     scene: Scene | None = scenes[0] if scenes else None

@@ -86,7 +86,12 @@ def load_run(
     ckpt = Path(checkpoint) if checkpoint is not None else latest_checkpoint(run)
     state = load_checkpoint(ckpt)
     env = env_from_recipe(
-        resolved, num_envs=num_envs, motions=motions, clips=clips, terminations=terminations
+        resolved,
+        num_envs=num_envs,
+        motions=motions,
+        clips=clips,
+        terminations=terminations,
+        registry=registry,
     )
     algorithm = resolved.component("algorithm").instantiate()
     assert isinstance(algorithm, Algorithm)

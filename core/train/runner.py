@@ -84,7 +84,9 @@ class Trainer:
         self.resolved, self.run = resolved, run
         self.checkpoint_every = checkpoint_every
         generator = seed_everything(resolved.recipe.seed)
-        self.env = env_from_recipe(resolved, num_envs=num_envs, threads=threads)
+        self.env = env_from_recipe(
+            resolved, num_envs=num_envs, threads=threads, registry=registry
+        )
         algorithm = resolved.component("algorithm").instantiate()
         assert isinstance(algorithm, Algorithm)
         self.algorithm = algorithm

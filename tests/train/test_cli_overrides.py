@@ -1,0 +1,70 @@
+"""CLI shorthands reach the run through the recipe (the lock file is exactly what ran), and the
+recipe's motion format is the one that reads the clips."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import yaml
+from helpers import TINY
+
+from retarget.cli.main import main
+from retarget.env.build import motion_formats
+from retarget.loader import load_plugins
+from retarget.motion.sources import load_motions
+from retarget.plugins.formats.bvh import Bvh
+from retarget.recipe import parse_text, resolve
+
+
+def test_num_envs_and_threads_flags_are_locked_and_the_run_resumes(
+    tmp_path: Path, capsys
+) -> None:
+    recipe = tmp_path / "tiny.yaml"
+    recipe.write_text(TINY)
+    assert main(["train", str(recipe), "--num-envs", "2", "--threads", "1", "--steps", "16",
+                 "--runs-dir", str(tmp_path), "--no-tensorboard"]) == 0  # fmt: skip
+    run = tmp_path / "tiny" / "latest"
+    lock = yaml.safe_load((run / "recipe.lock.yaml").read_text())
+    assert lock["env"]["num_envs"] == 2 and lock["sim"]["threads"] == 1
+    assert main(["train", "--resume", str(run), "--steps", "32", "--no-tensorboard"]) == 0
+    assert "resumed" in capsys.readouterr().out
+    assert main(["train", "--resume", str(run), "--threads", "2", "--steps", "48",
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    assert yaml.safe_load((run / "recipe.lock.yaml").read_text())["sim"]["threads"] == 2
+    assert main(["train", "--resume", str(run), "--num-envs", "4", "--steps", "64"]) != 0
+    assert "environment count" in capsys.readouterr().err
+
+
+def test_the_recipes_motion_format_reads_with_its_own_settings(tmp_path: Path) -> None:
+    sample = Bvh.write_sample(tmp_path)
+    registry = load_plugins()
+
+    def formats(units: str):
+        text = TINY + f"motions: {{path: {sample}, format: {{type: bvh, units: {units}}}}}\n"
+        return motion_formats(resolve(parse_text(text, "r.yaml", ".yaml"), registry), registry)
+
+    mm, metres = formats("mm"), formats("m")
+    assert mm is not None and mm["bvh"].config.units == "mm"
+    a, b = load_motions(sample, mm)[0], load_motions(sample, metres)[0]
+    assert not np.allclose(a.root_pos, b.root_pos), "units must change what is read"
+    default = motion_formats(resolve(parse_text(TINY, "r.yaml", ".yaml"), registry), registry)
+    assert default is not None and "bvh" in default
+
+
+def test_env_reads_clips_with_the_recipes_format(tmp_path: Path, monkeypatch) -> None:
+    from retarget.env.build import env_from_recipe
+
+    sample = Bvh.write_sample(tmp_path)
+    seen: list[str | None] = []
+    original = Bvh.read
+
+    def read(self, path):
+        seen.append(self.config.units)
+        return original(self, path)
+
+    monkeypatch.setattr(Bvh, "read", read)
+    registry = load_plugins()
+    text = TINY + f"motions: {{path: {sample}, format: {{type: bvh, units: cm}}}}\n"
+    env_from_recipe(resolve(parse_text(text, "r.yaml", ".yaml"), registry), registry=registry)
+    assert seen == ["cm"]
