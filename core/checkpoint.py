@@ -3,18 +3,34 @@
 A rename is atomic on POSIX file systems, so a process killed at any moment (even SIGKILL in
 the middle of a write) leaves either the previous checkpoint or the new one, never a torn
 file. The directory is fsynced too, so the rename itself survives a crash.
+
+Loading never runs code from the file: ``torch.load(weights_only=True)`` unpickles only
+tensors, containers, numbers, strings and the few numpy types a checkpoint holds (RNG states,
+simulator arrays; :data:`SAFE_GLOBALS`). A crafted file that asks for anything else is refused.
 """
 
 from __future__ import annotations
 
 import os
+import pickle
+import re
 import tempfile
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import torch
 
 from retarget.errors import RetargetError
+
+SAFE_GLOBALS: list[Any] = [
+    np.ndarray,
+    np.dtype,
+    np._core.multiarray._reconstruct,  # how numpy pickles arrays (data, not code)
+    bytes,
+    *{type(np.dtype(t)) for t in ("float64", "float32", "int64", "int32", "uint32", "bool")},
+]
+"""What besides tensors and plain containers a checkpoint may contain."""
 
 
 def save_checkpoint(path: str | Path, state: dict[str, Any]) -> Path:
@@ -43,9 +59,26 @@ def load_checkpoint(path: str | Path) -> dict[str, Any]:
     """Read a checkpoint; an unreadable file is a :class:`RetargetError` naming it."""
     path = Path(path)
     try:
-        with path.open("rb") as handle:
-            return torch.load(handle, map_location="cpu", weights_only=False)
+        with path.open("rb") as handle, torch.serialization.safe_globals(SAFE_GLOBALS):
+            state = torch.load(handle, map_location="cpu", weights_only=True)
     except FileNotFoundError:
         raise RetargetError("checkpoint not found", file=str(path)) from None
+    except pickle.UnpicklingError as exc:
+        found = re.search(r"Unsupported global: GLOBAL (\S+)", str(exc))
+        if found is None:
+            raise RetargetError("cannot read checkpoint: not a checkpoint file",
+                                file=str(path)) from None
+        raise RetargetError(
+            f"refused: the file asks for '{found.group(1)}', which a checkpoint never holds "
+            "(loading it could run code)",
+            file=str(path),
+            hint="only load checkpoints written by retarget train",
+        ) from None
     except Exception as exc:
         raise RetargetError(f"cannot read checkpoint: {exc}", file=str(path)) from None
+    if not isinstance(state, dict):
+        raise RetargetError(
+            f"not a retarget checkpoint (holds a {type(state).__name__}, not a mapping)",
+            file=str(path),
+        )
+    return state

@@ -30,6 +30,7 @@ from retarget.kinds.base import NAME_RE
 from retarget.loader import load_plugins
 from retarget.motion.clip import MotionClip
 from retarget.motion.skeleton import NUM_JOINTS
+from retarget.checkpoint import SAFE_GLOBALS
 from retarget.testing.fakes import FakeVecEnv, TinyCharacter, fake_context, tiny_world
 from retarget.testing.guard import NoPerEnvLoops
 from retarget.world import build_world
@@ -407,7 +408,14 @@ def check_algorithm_checkpoint(plugin: object) -> None:
     buffer.seek(0)
     other = make(plugin)
     other.setup(env, torch.Generator().manual_seed(123))
-    other.load_state_dict(torch.load(buffer, weights_only=False))
+    try:  # checkpoints are read without running code: the state must be plain data
+        with torch.serialization.safe_globals(SAFE_GLOBALS):
+            state = torch.load(buffer, weights_only=True)
+    except Exception as exc:
+        raise AssertionError(
+            f"state_dict() holds something a safe checkpoint load refuses: {exc}"
+        ) from None
+    other.load_state_dict(state)
     obs = env.reset()
     assert torch.equal(algo.act(obs), other.act(obs)), "a restored checkpoint acts differently"
 
