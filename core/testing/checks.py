@@ -24,13 +24,13 @@ import yaml
 from pydantic import ValidationError
 
 from retarget import hookspecs
+from retarget.checkpoint import SAFE_GLOBALS
 from retarget.errors import MotionError
 from retarget.kinds import KINDS, Plugin, PluginConfig
 from retarget.kinds.base import NAME_RE
 from retarget.loader import load_plugins
 from retarget.motion.clip import MotionClip
 from retarget.motion.skeleton import NUM_JOINTS
-from retarget.checkpoint import SAFE_GLOBALS
 from retarget.testing.fakes import FakeVecEnv, TinyCharacter, fake_context, tiny_world
 from retarget.testing.guard import NoPerEnvLoops
 from retarget.world import build_world
