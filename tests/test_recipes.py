@@ -106,6 +106,9 @@ def test_missing_file(tmp_path: Path, registry: Registry) -> None:
         ("- a\n- b\n", "mapping"),
         ("character: tiny\nseed: x\n", "seed"),
         ("character: tiny\nsim: {actuation: servo}\n", "sim.actuation"),
+        ("character: tiny\nname: ../escape\n", "name"),
+        ("character: tiny\nname: /etc/x\n", "name"),
+        ("character: tiny\nname: ..\n", "name"),
     ],
 )
 def test_other_shapes_of_bad_input(tmp_path: Path, registry: Registry, text, needle) -> None:
@@ -219,3 +222,22 @@ def test_characters_without_a_recipe_file_get_their_table2_column(tmp_path) -> N
     own.write_text("character: dino\nrewards:\n  joint_pos: {weight: 3.0}\n")
     r = load(str(own), registry, shorthands={"character": "dino"}, assignments=[])
     assert [k for k in r.components if k.startswith("rewards.")] == ["rewards.joint_pos"]
+
+
+def test_named_packaged_recipes() -> None:
+    """`retarget train paper` / `teacher --character dino`: packaged recipes by name, the
+    character's own variant first; the default uses PD targets, `paper` the paper's torques."""
+    registry = load_plugins()
+    default = load(None, registry, shorthands={"character": "dino"})
+    assert default.recipe.sim.actuation == "pd"
+    assert default.component("algorithm").config.learning_rate == 4e-4
+    paper = load("paper", registry, shorthands={"character": "dino"})
+    assert paper.recipe.sim.actuation == "torque"
+    assert paper.component("algorithm").config.learning_rate == 1.2e-4
+    assert paper.components["rewards.foot_contact"].config.weight == 1.5  # Dino's column
+    teacher = load("teacher", registry, shorthands={"character": "oppy"})
+    assert [c.entry.name for c in teacher.of_kind("sensor")] == ["full_body", "reference_action"]
+    assert teacher.component("algorithm").config.residual == "reference_action"
+    with pytest.raises(RecipeError, match="not found") as err:
+        load("no_such_recipe", registry)
+    assert "teacher" in (err.value.hint or "")

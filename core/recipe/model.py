@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from retarget.sim.actuation import Actuation
 
@@ -86,7 +86,12 @@ class EnvSection(Strict):
 class Recipe(Strict):
     """A complete, declarative description of one training or evaluation setup."""
 
-    name: str | None = Field(None, description="run name (defaults to character-sensors)")
+    name: str | None = Field(
+        None,
+        description="run name (defaults to character-sensors): one path component of letters, "
+        "digits, '.', '_' and '-', so a run is always written inside the runs directory",
+        pattern=r"^[A-Za-z0-9._-]{1,100}$",
+    )
     seed: int = 0
     character: ComponentRef
     scene: ComponentRef | None = None
@@ -98,6 +103,13 @@ class Recipe(Strict):
     motions: MotionsSection = Field(default_factory=MotionsSection)
     sim: SimSection = Field(default_factory=SimSection)
     env: EnvSection = Field(default_factory=EnvSection)
+
+    @field_validator("name")
+    @classmethod
+    def _one_component(cls, value: str | None) -> str | None:
+        if value in {".", ".."}:
+            raise ValueError("a run name cannot be '.' or '..'")
+        return value
 
     @model_validator(mode="before")
     @classmethod

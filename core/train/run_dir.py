@@ -15,7 +15,15 @@ LOCK = "recipe.lock.yaml"
 
 
 def new_run_dir(root: str | Path, name: str) -> Path:
-    """Create ``root/name/TIMESTAMP`` (unique) and point ``root/name/latest`` at it."""
+    """Create ``root/name/TIMESTAMP`` (unique) and point ``root/name/latest`` at it.
+
+    ``name`` is one path component (recipes validate it), so nothing is written outside
+    ``root``; anything else is refused here too."""
+    if not name or name in {".", ".."} or "/" in name or "\\" in name or "\0" in name:
+        raise RetargetError(
+            f"run name {name!r} must be one path component (no '/', not '.' or '..')",
+            hint="set `name:` in the recipe or --set name=NAME",
+        )
     base = Path(root) / name
     base.mkdir(parents=True, exist_ok=True)
     stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
