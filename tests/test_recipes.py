@@ -109,6 +109,12 @@ def test_missing_file(tmp_path: Path, registry: Registry) -> None:
         ("character: tiny\nname: ../escape\n", "name"),
         ("character: tiny\nname: /etc/x\n", "name"),
         ("character: tiny\nname: ..\n", "name"),
+        ("character: tiny\nseed: 1\nseed: 2\n", "duplicate key 'seed'"),
+        ("a: " + "[" * 100 + "]" * 100 + "\n", "deeper than 64"),
+        ("a: &a [x, x, x, x, x, x, x, x, x, x]\n"
+         + "".join(f"{n}: &{n} [{', '.join([f'*{p}'] * 10)}]\n"
+                   for p, n in zip("abcdef", "bcdefg", strict=True)),
+         "more than 100000 values"),
     ],
 )
 def test_other_shapes_of_bad_input(tmp_path: Path, registry: Registry, text, needle) -> None:

@@ -39,18 +39,61 @@ class RecipeSource:
         return self.path, None
 
 
-def _yaml_lines(node: yaml.Node, prefix: str, out: dict[str, int]) -> None:
+MAX_VALUES = 100_000
+"""Most values a recipe may expand to (YAML aliases can make a few lines expand to billions)."""
+MAX_DEPTH = 64
+"""Deepest nesting a recipe may have."""
+
+
+class _TooBig(Exception):
+    pass
+
+
+def _yaml_lines(
+    node: yaml.Node,
+    prefix: str,
+    out: dict[str, int],
+    depth: int = 0,
+    budget: list[int] | None = None,
+) -> None:
+    """Dotted path -> line of every value, counting them: a recipe that nests deeper than
+    :data:`MAX_DEPTH` or expands past :data:`MAX_VALUES` values is refused."""
+    budget = [MAX_VALUES] if budget is None else budget
+    if depth > MAX_DEPTH:
+        raise _TooBig(f"nests deeper than {MAX_DEPTH} levels")
+    budget[0] -= 1
+    if budget[0] < 0:
+        raise _TooBig(f"expands to more than {MAX_VALUES} values (YAML aliases?)")
     if isinstance(node, yaml.MappingNode):
         for key_node, value_node in node.value:
             key = str(key_node.value)
             dotted = f"{prefix}.{key}" if prefix else key
             out[dotted] = key_node.start_mark.line + 1
-            _yaml_lines(value_node, dotted, out)
+            _yaml_lines(value_node, dotted, out, depth + 1, budget)
     elif isinstance(node, yaml.SequenceNode):
         for i, item in enumerate(node.value):
             dotted = f"{prefix}.{i}" if prefix else str(i)
             out[dotted] = item.start_mark.line + 1
-            _yaml_lines(item, dotted, out)
+            _yaml_lines(item, dotted, out, depth + 1, budget)
+
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` that refuses a key given twice in one mapping (YAML would keep the
+    last one silently: a recipe that says one thing and does another)."""
+
+    def construct_mapping(self, node: yaml.Node, deep: bool = False):  # type: ignore[override]
+        seen: dict[object, int] = {}
+        for key_node, _ in node.value:  # type: ignore[union-attr]
+            key = self.construct_object(key_node, deep=deep)
+            if isinstance(key, (str, int, float, bool)) and key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None,
+                    f"duplicate key '{key}' (first on line {seen[key]})",
+                    key_node.start_mark,
+                )
+            if isinstance(key, (str, int, float, bool)):
+                seen[key] = key_node.start_mark.line + 1
+        return super().construct_mapping(node, deep=deep)  # type: ignore[arg-type]
 
 
 LOCK_SECTION = "_lock"
@@ -66,8 +109,15 @@ def parse_text(text: str, path: str, suffix: str) -> RecipeSource:
             raise RecipeError(f"invalid TOML: {exc}", file=path) from None
     else:
         try:
-            data = yaml.safe_load(text)
-            node = yaml.compose(text)
+            node = yaml.compose(text, Loader=yaml.SafeLoader)
+            if node is not None:
+                _yaml_lines(node, "", lines)  # bounded walk before anything is built
+            data = yaml.load(text, Loader=_UniqueKeyLoader)
+        except _TooBig as exc:
+            raise RecipeError(f"refused: the recipe {exc}", file=path) from None
+        except RecursionError:
+            raise RecipeError(f"refused: the recipe nests deeper than {MAX_DEPTH} levels",
+                              file=path) from None
         except yaml.MarkedYAMLError as exc:
             mark = exc.problem_mark or exc.context_mark
             line = mark.line + 1 if mark is not None else None
@@ -75,8 +125,6 @@ def parse_text(text: str, path: str, suffix: str) -> RecipeSource:
             raise RecipeError(f"invalid YAML: {problem}", file=path, line=line) from None
         except yaml.YAMLError as exc:
             raise RecipeError(f"invalid YAML: {exc}", file=path) from None
-        if node is not None:
-            _yaml_lines(node, "", lines)
     if data is None:
         raise RecipeError("the recipe is empty", file=path)
     if not isinstance(data, dict):

@@ -17,12 +17,12 @@ from pathlib import Path
 from typing import Any
 
 import torch
-import yaml
 
 import retarget
 from retarget import Algorithm, PluginError, RecipeError, VecEnv
 from retarget.learn.dagger import DaggerConfig, DaggerLearner
 from retarget.motion.procedural import idle_clip
+from retarget.recipe import parse_text
 from retarget.train.load import load_run
 from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
 
@@ -90,10 +90,11 @@ class Dagger(Algorithm):
         run = resolve_run(c.teacher)
         lock_file = run / LOCK
         try:
-            teacher = yaml.safe_load(lock_file.read_text(encoding="utf-8"))
-        except (OSError, yaml.YAMLError) as exc:
+            text = lock_file.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
             raise RecipeError(f"cannot read the teacher's recipe: {exc}",
                               file=str(lock_file)) from None
+        teacher = parse_text(text, str(lock_file), ".yaml").data  # bounded, no duplicates
         if not isinstance(teacher, dict) or "character" not in teacher:
             raise RecipeError("not a run's recipe (no character)", file=str(lock_file))
         self._check_match(recipe, teacher, lock_file)
