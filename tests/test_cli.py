@@ -6,6 +6,8 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 from retarget.cli.main import main
 
 COMMAND = """
@@ -110,3 +112,25 @@ def test_motion_generate_writes_clips_that_read_back(tmp_path, capsys) -> None:
     np.testing.assert_allclose(read.global_pos, made.global_pos, atol=1e-4)
     assert main(["motion", "generate", "--out", str(tmp_path), "--names", "sitting"]) == 2
     assert "choose from idle" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["train", "--minutes", "nan"], "not finite"),
+        (["train", "--steps", "0"], "outside"),
+        (["train", "--steps", "-5"], "outside"),
+        (["train", "--checkpoint-every", "0"], "outside"),
+        (["train", "--num-envs", "100000000"], "outside"),
+        (["eval", "run", "--every", "0"], "outside"),
+        (["eval", "run", "--max-seconds", "inf"], "not finite"),
+        (["eval", "run", "--num-envs", "-1"], "outside"),
+        (["play", "run", "--out", "x.png", "--seconds", "0"], "must be >"),
+        (["play", "run", "--out", "x.png", "--seconds", "1e9"], "<= 600"),
+    ],
+)
+def test_number_flags_refuse_what_no_run_can_use(argv, needle, capsys) -> None:
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    assert needle in capsys.readouterr().err

@@ -10,6 +10,7 @@ from rich.progress import Progress
 from rich.table import Table
 
 from retarget.cli.console import out
+from retarget.cli.numbers import amount, count
 from retarget.cli.run_changes import add_run_change_args
 from retarget.eval import EvalSettings, evaluate
 from retarget.registry import Registry
@@ -42,9 +43,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser = sub.add_parser("eval", help="evaluate a trained run on motion clips")
     parser.add_argument("run", help="run directory (runs/NAME/latest)")
     parser.add_argument("--motions", help="clip file or directory (default: the run's own)")
-    parser.add_argument("--every", type=int, default=30, help="start a run every K frames")
-    parser.add_argument("--max-seconds", type=float, default=30.0, help="length of each run")
-    parser.add_argument("--num-envs", type=int, default=64, help="runs evaluated together")
+    parser.add_argument(
+        "--every", type=count(1, 10**6), default=30, help="start a run every K frames"
+    )
+    parser.add_argument(
+        "--max-seconds", type=amount(0.0, 3600.0), default=30.0, help="length of each run"
+    )
+    parser.add_argument(
+        "--num-envs", type=count(1, 4096), default=64, help="runs evaluated together"
+    )
     parser.add_argument("--json", dest="json_out", help="where to write the JSON report")
     parser.add_argument("--checkpoint", help="a specific checkpoint file (default: latest)")
     add_run_change_args(parser)

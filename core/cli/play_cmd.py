@@ -10,6 +10,7 @@ import torch
 
 from retarget.character_view import label, save_video
 from retarget.cli.console import out
+from retarget.cli.numbers import amount, count
 from retarget.cli.run_changes import add_run_change_args
 from retarget.errors import RetargetError
 from retarget.motion.device_recording import DeviceRecording, read_recording
@@ -25,15 +26,29 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser = sub.add_parser("play", help="render a trained policy (several runs side by side)")
     parser.add_argument("runs", nargs="+", help="run directories (runs/NAME/latest)")
     parser.add_argument("--motions", help="clip to play (default: the run's first clip)")
-    parser.add_argument("--clip", type=int, default=0, help="index of the clip when a directory")
-    parser.add_argument("--out", required=True,
-                        help="output .gif, .mp4 or .png (8 frames, one sheet)")
-    parser.add_argument("--seconds", type=float, default=8.0)
-    parser.add_argument("--start", type=float, default=0.0, help="start time in the clip, s")
+    parser.add_argument(
+        "--clip", type=count(0, 10**6), default=0, help="index of the clip when a directory"
+    )
+    parser.add_argument(
+        "--out", required=True, help="output .gif, .mp4 or .png (8 frames, one sheet)"
+    )
+    parser.add_argument(
+        "--seconds", type=amount(0.0, 600.0), default=8.0, help="length of the rollout"
+    )
+    parser.add_argument(
+        "--start",
+        type=amount(0.0, 1e5, inclusive=True),
+        default=0.0,
+        help="start time in the clip, s",
+    )
     parser.add_argument("--size", default="480x360", help="WIDTHxHEIGHT of each view")
     parser.add_argument("--ghost-offset", type=float, default=0.0, help="ghost shift, m")
-    parser.add_argument("--azimuth", type=float, default=135.0,
-                        help="camera direction, degrees in the world frame (90: along +y)")
+    parser.add_argument(
+        "--azimuth",
+        type=float,
+        default=135.0,
+        help="camera direction, degrees in the world frame (90: along +y)",
+    )
     parser.add_argument("--elevation", type=float, default=-15.0,
                         help="camera elevation, degrees (negative: from above)")  # fmt: skip
     parser.add_argument(

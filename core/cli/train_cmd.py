@@ -9,6 +9,7 @@ from pathlib import Path
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeRemainingColumn
 
 from retarget.cli.console import out, warning
+from retarget.cli.numbers import amount, count
 from retarget.cli.recipe_cmd import add_recipe_flags, load_from_args
 from retarget.errors import RecipeError
 from retarget.registry import Registry
@@ -27,8 +28,16 @@ from retarget.train.warm_start import INIT_FROM, warm_start
 def add_parser(sub: argparse._SubParsersAction) -> None:
     parser = sub.add_parser("train", help="train a policy (PPO by default)")
     add_recipe_flags(parser)
-    parser.add_argument("--steps", type=int, help="stop after this many environment steps")
-    parser.add_argument("--minutes", type=float, help="stop after this many minutes")
+    parser.add_argument(
+        "--steps",
+        type=count(1, 10**12),
+        help="stop after this many environment steps (with --resume: in total)",
+    )
+    parser.add_argument(
+        "--minutes",
+        type=amount(0.0, 1e6),
+        help="stop after this many minutes (with --resume: in total)",
+    )
     parser.add_argument("--resume", metavar="RUN", help="continue a run (runs/NAME/latest)")
     parser.add_argument(
         "--init-from",
@@ -45,14 +54,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "the recipe's own",
     )
     parser.add_argument("--runs-dir", default="runs", help="where run directories go")
-    parser.add_argument("--num-envs", type=int, help="override env.num_envs")
+    parser.add_argument("--num-envs", type=count(1, 65536), help="override env.num_envs")
     parser.add_argument(
         "--threads",
-        type=int,
+        type=count(0, 1024),
         help="physics threads (overrides sim.threads; allowed with --resume: each environment "
         "steps the same whatever the thread count, so only the speed changes)",
     )
-    parser.add_argument("--checkpoint-every", type=int, default=10, help="iterations")
+    parser.add_argument(
+        "--checkpoint-every",
+        type=count(1, 10**6),
+        default=10,
+        help="iterations between checkpoints",
+    )
     parser.add_argument("--no-tensorboard", action="store_true", help="CSV logs only")
     parser.set_defaults(handler=run)
 
@@ -109,7 +123,8 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         resolved = prepared_recipe(load_from_args(args, registry), registry)
         groups = resolved.recipe.env.groups or {}
         seen = [  # the sensors the policy reads (a teacher's own are not in its name)
-            c.entry.name for c in resolved.of_kind("sensor")
+            c.entry.name
+            for c in resolved.of_kind("sensor")
             if "actor" not in groups or c.entry.name in groups["actor"]
         ]
         name = resolved.recipe.name or default_run_name(resolved.character.entry.name, seen)
