@@ -16,7 +16,7 @@ One control step, in order (DESIGN.md §5):
 
 Environments whose physics blew up are flagged by ``BatchedSim``; they end as failures with a
 zero reward and are counted in ``info["nan_resets"]``: no NaN reaches an observation or a
-reward.
+reward. A non-finite action does the same (zero action, failure, ``info["nan_actions"]``).
 """
 
 from __future__ import annotations
@@ -122,6 +122,7 @@ class RetargetEnv:
         self.episode_return = torch.zeros(n)
         self.prev_action = torch.zeros(n, layout.nu)
         self.nan_resets = 0
+        self.nan_actions = 0  # actions with NaN/inf (those environments end as failures)
         self.total_steps = 0  # environment steps taken (num_envs per call of step)
         self.seconds = dict.fromkeys(
             ("reference", "rewards", "terminations", "observations", "resets"), 0.0
@@ -288,9 +289,11 @@ class RetargetEnv:
     # ------------------------------------------------------------------ stepping
 
     def step(self, action: torch.Tensor):
-        action = torch.as_tensor(action, dtype=torch.float32).clamp(-1.0, 1.0)
+        action = torch.as_tensor(action, dtype=torch.float32)
+        broken = ~torch.isfinite(action).all(dim=-1)  # a policy that output NaN/inf
+        action = torch.nan_to_num(action, 0.0, 0.0, 0.0).clamp(-1.0, 1.0)
         self.total_steps += self.num_envs
-        bad = torch.from_numpy(self.sim.step(action))
+        bad = torch.from_numpy(self.sim.step(action)) | broken
         sec, t0 = self.seconds, time.perf_counter()
         self.frame, clip_end = self.library.advance(self.clip, self.frame)
         self.episode_step += 1
@@ -309,8 +312,9 @@ class RetargetEnv:
         t4 = time.perf_counter()
         done = failed | timed_out
         ids = done.nonzero().flatten()
-        info: dict = {"nan_resets": int(bad.sum())}
+        info: dict = {"nan_resets": int(bad.sum()), "nan_actions": int(broken.sum())}
         self.nan_resets += info["nan_resets"]
+        self.nan_actions += info["nan_actions"]
         self.prev_action = action.clone()
         if ids.numel():
             if timed_out.any():  # only time-outs bootstrap from the observation they ended in

@@ -8,6 +8,7 @@ killed mid-write keeps its previous checkpoint.
 
 from __future__ import annotations
 
+import math
 import random
 import signal
 import time
@@ -22,7 +23,7 @@ import torch
 
 from retarget.checkpoint import load_checkpoint, save_checkpoint
 from retarget.env.build import env_from_recipe
-from retarget.errors import RecipeError
+from retarget.errors import RecipeError, SimulationError
 from retarget.kinds import Algorithm
 from retarget.recipe import ResolvedRecipe, write_lock
 from retarget.registry import Registry
@@ -142,6 +143,19 @@ class Trainer:
             raise KeyboardInterrupt
         self.stop_reason = "interrupted"
 
+    def _check_finite(self, stats: dict[str, float]) -> None:
+        """Stop at the first non-finite statistic (a loss, a return): running on would only
+        overwrite good checkpoints with NaN weights."""
+        for key, value in stats.items():
+            if not math.isfinite(float(value)):
+                raise SimulationError(
+                    f"training went non-finite at iteration {self.progress.iteration + 1}: "
+                    f"{key} = {value}",
+                    file=str(self.run),
+                    hint="the checkpoints written so far are intact; resume from the last one "
+                    "with a lower learning rate, or check the reward terms",
+                )
+
     def train(self, budget: Budget, on_iteration: Callable[[Progress], None] | None = None) -> Path:
         """Run until the budget is spent or a stop is requested; returns the last checkpoint."""
         self.stop_reason = "budget"
@@ -155,6 +169,7 @@ class Trainer:
                 before = self.env.total_steps
                 ends_before = self.env.termination_counts
                 stats = self.algorithm.train_iteration(self.env)
+                self._check_finite(stats)
                 stats.update(self._termination_shares(ends_before))
                 p = self.progress
                 p.iteration += 1

@@ -70,6 +70,16 @@ def test_nan_in_one_env_resets_only_that_env(human: RetargetEnv) -> None:
     assert all(torch.isfinite(v).all() for v in obs.values()) and torch.isfinite(reward).all()
 
 
+def test_nan_action_ends_that_env_as_a_failure(human: RetargetEnv) -> None:
+    human.reset()
+    action = torch.zeros(human.num_envs, human.action_dim)
+    action[2, 0] = float("nan")
+    obs, reward, terminated, _, info = human.step(action)
+    assert info["nan_actions"] == 1 and info["nan_resets"] == 1
+    assert terminated[2] and reward[2] == 0.0
+    assert all(torch.isfinite(v).all() for v in obs.values()) and torch.isfinite(reward).all()
+
+
 def _rotated(state: SimState, angle: float, shift: torch.Tensor) -> SimState:
     """The same state with the world turned by ``angle`` about +Z and moved by ``shift``."""
     q = yaw_quat(torch.tensor(angle))

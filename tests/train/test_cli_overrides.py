@@ -68,3 +68,29 @@ def test_env_reads_clips_with_the_recipes_format(tmp_path: Path, monkeypatch) ->
     text = TINY + f"motions: {{path: {sample}, format: {{type: bvh, units: cm}}}}\n"
     env_from_recipe(resolve(parse_text(text, "r.yaml", ".yaml"), registry), registry=registry)
     assert seen == ["cm"]
+
+
+def test_training_that_goes_non_finite_stops_naming_the_iteration(
+    tmp_path: Path, monkeypatch, capsys
+) -> None:
+    from retarget.plugins.algorithms.ppo import PPO
+
+    recipe = tmp_path / "tiny.yaml"
+    recipe.write_text(TINY)
+    original = PPO.train_iteration
+    calls = []
+
+    def train_iteration(self, env):
+        stats = original(self, env)
+        calls.append(1)
+        if len(calls) == 3:
+            stats["policy_loss"] = float("nan")
+        return stats
+
+    monkeypatch.setattr(PPO, "train_iteration", train_iteration)
+    rc = main(["train", str(recipe), "--steps", "320", "--checkpoint-every", "1",
+               "--runs-dir", str(tmp_path), "--no-tensorboard"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc == 2 and "iteration 3" in err and "policy_loss" in err
+    names = sorted(p.name for p in (tmp_path / "tiny" / "latest" / "checkpoints").iterdir())
+    assert names == ["ckpt-0000001.pt", "ckpt-0000002.pt"], "no checkpoint of the NaN state"
