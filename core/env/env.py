@@ -300,7 +300,7 @@ class RetargetEnv:
         ctx = self._context(action)
         self.last_context = ctx  # the step's state before any reset (evaluation reads it)
         t1 = time.perf_counter()
-        reward = self.rewards.compute(ctx)
+        reward = self.rewards.compute(ctx, valid=~bad)
         t2 = time.perf_counter()
         failed, timed_out = self.terminations.check(ctx)
         t3 = time.perf_counter()

@@ -6,6 +6,7 @@ from collections.abc import Mapping
 
 import torch
 
+from retarget.errors import PluginError
 from retarget.kinds import RewardTerm, Termination
 from retarget.state import StepContext
 
@@ -24,11 +25,41 @@ class RewardManager:
         self.episode_sums = torch.zeros(num_envs, len(self.terms))
         self._step_values = torch.zeros(num_envs, len(self.terms))
 
-    def compute(self, ctx: StepContext) -> torch.Tensor:
-        """Weighted reward of the step without failure penalties (added by :meth:`penalize`)."""
+    def compute(self, ctx: StepContext, valid: torch.Tensor | None = None) -> torch.Tensor:
+        """Weighted reward of the step without failure penalties (added by :meth:`penalize`).
+
+        Every term must return ``(N,)`` floats, finite wherever ``valid`` (environments whose
+        physics did not blow up); anything else is a :class:`PluginError` naming the term.
+        """
         if not self.terms:
             return torch.zeros(ctx.num_envs)
-        values = torch.stack([t.compute(ctx) for t in self.terms.values()], dim=1)
+        parts = []
+        for name, term in self.terms.items():
+            value = term.compute(ctx)
+            if (
+                not isinstance(value, torch.Tensor)
+                or tuple(value.shape) != (ctx.num_envs,)
+                or not value.is_floating_point()
+            ):
+                got = (f"{tuple(value.shape)} {value.dtype}" if isinstance(value, torch.Tensor)
+                       else type(value).__name__)  # fmt: skip
+                raise PluginError(
+                    f"compute() returned {got}; expected ({ctx.num_envs},) floats",
+                    plugin=f"reward {term.name}", field=f"rewards.{name}",
+                )
+            parts.append(value.float())
+        values = torch.stack(parts, dim=1)
+        finite = torch.isfinite(values)
+        if not bool(finite.all()):
+            rows = finite.all(dim=1) | (~valid if valid is not None else False)
+            if not bool(rows.all()):
+                i = int((~finite[~rows]).any(dim=0).nonzero()[0])
+                raise PluginError(
+                    "compute() returned NaN or inf for an environment whose simulation is "
+                    "finite",
+                    plugin=f"reward {self.terms[self.names[i]].name}",
+                    field=f"rewards.{self.names[i]}",
+                )
         self._step_values = values * self.weights
         return self._step_values.sum(dim=1)
 
@@ -67,6 +98,17 @@ class TerminationManager:
         timed_out = torch.zeros(n, dtype=torch.bool)
         for name, term in self.terms.items():
             hit = term.check(ctx)
+            if (
+                not isinstance(hit, torch.Tensor)
+                or tuple(hit.shape) != (n,)
+                or hit.dtype != torch.bool
+            ):
+                got = (f"{tuple(hit.shape)} {hit.dtype}" if isinstance(hit, torch.Tensor)
+                       else type(hit).__name__)  # fmt: skip
+                raise PluginError(
+                    f"check() returned {got}; expected ({n},) bool",
+                    plugin=f"termination {term.name}", field=f"terminations.{name}",
+                )
             self.counts[name] += int(hit.sum())
             if term.time_out:
                 timed_out |= hit
