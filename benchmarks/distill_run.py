@@ -11,6 +11,7 @@ Run by hand, in stages (each prints what it ran; figures go to ``OUT/*.json`` an
     python benchmarks/distill_run.py quality runs/distill/human-three_point-student/latest
         # per-frame success of its checkpoints on the training clips: steps to 0.8
     python benchmarks/distill_run.py plot RUN [RUN ...] --png curves.png
+    python benchmarks/distill_run.py compare RUN [RUN ...] --marks 0.1 0.2 0.3   # A/B, equal steps
 
 Split of ``../shared/data/mocap`` (or ``$RETARGET_SHARED_DATA``): training = every clip but
 three (walks, turns, runs, hop, kick, gestures); left out = CMU 131_01 (a walk by another
@@ -169,7 +170,9 @@ def plot(runs: list[Path], png: Path) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("stage", choices=("teacher", "student", "eval", "quality", "plot"))
+    parser.add_argument(
+        "stage", choices=("teacher", "student", "eval", "quality", "plot", "compare")
+    )
     parser.add_argument("runs", nargs="*", help="eval/quality/plot: run directories")
     parser.add_argument("--character", default="human")
     parser.add_argument("--sensors", default="three_point")
@@ -182,6 +185,8 @@ def main() -> None:
     parser.add_argument("--target", type=float, default=0.8, help="quality: success to reach")
     parser.add_argument("--stride", type=int, default=2, help="quality: every K-th checkpoint")
     parser.add_argument("--png", default="curves.png", help="plot: the image")
+    parser.add_argument("--marks", type=float, nargs="+", default=[0.1, 0.2, 0.3, 0.5, 1.0],
+                        help="compare: millions of environment steps")
     args = parser.parse_args()
     out = Path(args.out)
     if args.stage == "teacher":
@@ -202,6 +207,11 @@ def main() -> None:
     elif args.stage == "quality":
         for r in args.runs:
             print(f"\n{r}\n" + quality(Path(r), out, args.target, args.stride))
+    elif args.stage == "compare":
+        sys.path.insert(0, str(Path(__file__).parent))
+        from learning_run import compare  # one definition of the equal-steps table
+
+        print(compare([Path(r) for r in args.runs], args.marks))
     else:
         plot([Path(r) for r in args.runs], Path(args.png))
 

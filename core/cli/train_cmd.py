@@ -86,7 +86,7 @@ def _resume_recipe(run: Path, registry: Registry, threads: int | None):
 
 
 def run(args: argparse.Namespace, registry: Registry) -> int:
-    if args.steps is None and args.minutes is None and args.resume is None:
+    if args.steps is None and args.minutes is None:
         out.print("no --steps or --minutes given: training until Ctrl-C (checkpoint on exit)")
     if args.resume and (args.init_from or args.teacher):
         raise RecipeError(

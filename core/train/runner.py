@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import random
 import signal
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -142,6 +143,8 @@ class Trainer:
         if self._stop_requests > 1:
             raise KeyboardInterrupt
         self.stop_reason = "interrupted"
+        print("\nstopping after this iteration (a checkpoint is written; Ctrl-C again aborts)",
+              file=sys.stderr, flush=True)  # fmt: skip
 
     def _check_finite(self, stats: dict[str, float]) -> None:
         """Stop at the first non-finite statistic (a loss, a return): running on would only

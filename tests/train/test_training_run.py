@@ -133,7 +133,7 @@ def test_ctrl_c_leaves_a_loadable_checkpoint_that_resumes(recipe: Path, tmp_path
     proc.send_signal(signal.SIGINT)
     output, _ = proc.communicate(timeout=120)
     assert proc.returncode == 130, output
-    assert "interrupted" in output
+    assert "interrupted" in output and "stopping after this iteration" in output
     run = (tmp_path / "tiny" / "latest").resolve()
     state = load_checkpoint(latest_checkpoint(run))
     done = state["progress"]["iteration"]
