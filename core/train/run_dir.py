@@ -1,6 +1,6 @@
-"""Run directories: ``runs/NAME/TIMESTAMP/{recipe.lock.yaml, checkpoints/, tb/, metrics.csv,
-videos/}`` with a ``latest`` link per name, so ``runs/dino-hmd/latest`` always means the
-newest run of that recipe."""
+"""Run directories: ``runs/NAME/TIMESTAMP/{recipe.lock.yaml, checkpoints/, tb/, metrics.csv}``
+with a ``latest`` link per name, so ``runs/dino-hmd/latest`` always means the newest run of
+that recipe."""
 
 from __future__ import annotations
 
@@ -27,12 +27,15 @@ def new_run_dir(root: str | Path, name: str) -> Path:
     base = Path(root) / name
     base.mkdir(parents=True, exist_ok=True)
     stamp = dt.datetime.now().strftime("%Y%m%d-%H%M%S")
-    path = base / stamp
     suffix = 1
-    while path.exists():
-        suffix += 1
-        path = base / f"{stamp}-{suffix}"
-    for sub in (CHECKPOINTS, "tb", "videos"):
+    while True:  # mkdir claims the directory atomically: two runs started at once never share
+        path = base / (stamp if suffix == 1 else f"{stamp}-{suffix}")
+        try:
+            path.mkdir()
+            break
+        except FileExistsError:
+            suffix += 1
+    for sub in (CHECKPOINTS, "tb"):
         (path / sub).mkdir(parents=True)
     latest = base / "latest"
     tmp = base / f".latest-{os.getpid()}"
@@ -68,3 +71,42 @@ def latest_checkpoint(run: Path) -> Path:
 
 def default_run_name(character: str, sensors: list[str]) -> str:
     return "-".join([character, *sensors]) if sensors else character
+
+
+class RunLock:
+    """An exclusive lock on a run directory while a process trains it: a second ``--resume``
+    of a run that is still training is refused instead of interleaving two writers. The lock
+    is the kernel's (``flock``), so it vanishes with the process, even after SIGKILL."""
+
+    FILE = ".train.lock"
+
+    def __init__(self, run: Path) -> None:
+        self.path = Path(run) / self.FILE
+        self.handle = None
+
+    def acquire(self) -> RunLock:
+        import fcntl
+
+        handle = self.path.open("a+")
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            handle.seek(0)
+            owner = handle.read().strip() or "another process"
+            handle.close()
+            raise RetargetError(
+                f"this run is being trained by {owner}",
+                file=str(self.path.parent),
+                hint="wait for it to stop (Ctrl-C there), or train a new run",
+            ) from None
+        handle.seek(0)
+        handle.truncate()
+        handle.write(f"pid {os.getpid()}\n")
+        handle.flush()
+        self.handle = handle
+        return self
+
+    def release(self) -> None:
+        if self.handle is not None:
+            self.handle.close()  # closing drops the flock
+            self.handle = None

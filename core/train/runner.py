@@ -29,7 +29,7 @@ from retarget.kinds import Algorithm
 from retarget.recipe import ResolvedRecipe, write_lock
 from retarget.registry import Registry
 from retarget.train.logger import MetricsLogger
-from retarget.train.run_dir import CHECKPOINTS
+from retarget.train.run_dir import CHECKPOINTS, RunLock
 
 
 @dataclass
@@ -84,6 +84,7 @@ class Trainer:
                 hint="add `algorithm: ppo` to the recipe or pass --algorithm ppo",
             )
         self.resolved, self.run = resolved, run
+        self._lock = RunLock(run).acquire()  # one writer per run directory
         self.checkpoint_every = checkpoint_every
         generator = seed_everything(resolved.recipe.seed)
         self.env = env_from_recipe(
@@ -194,4 +195,5 @@ class Trainer:
             for sig, handler in previous.items():
                 signal.signal(sig, handler)
             self.logger.close()
+            self._lock.release()
         return last

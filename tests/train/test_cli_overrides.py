@@ -94,3 +94,33 @@ def test_training_that_goes_non_finite_stops_naming_the_iteration(
     assert rc == 2 and "iteration 3" in err and "policy_loss" in err
     names = sorted(p.name for p in (tmp_path / "tiny" / "latest" / "checkpoints").iterdir())
     assert names == ["ckpt-0000001.pt", "ckpt-0000002.pt"], "no checkpoint of the NaN state"
+
+
+def test_a_run_being_trained_cannot_be_resumed_by_a_second_process(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    from retarget.errors import RetargetError
+    from retarget.train.run_dir import RunLock, new_run_dir
+
+    run = new_run_dir(tmp_path, "busy")
+    holder = subprocess.Popen(
+        [sys.executable, "-c",
+         "import sys, time; from pathlib import Path; from retarget.train.run_dir import RunLock;"
+         f"lock = RunLock(Path({str(run)!r})).acquire(); print('held', flush=True);"
+         "time.sleep(30)"],
+        stdout=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert holder.stdout is not None and holder.stdout.readline().strip() == "held"
+        try:
+            RunLock(run).acquire()
+        except RetargetError as exc:
+            assert "being trained by pid" in str(exc)
+        else:
+            raise AssertionError("a second writer got the lock")
+    finally:
+        holder.kill()
+        holder.wait()
+    RunLock(run).acquire().release()  # the lock died with its process (even on SIGKILL)
+    assert new_run_dir(tmp_path, "busy") != run  # two runs started at once never share
