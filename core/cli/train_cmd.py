@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
 
 from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeRemainingColumn
@@ -18,8 +19,8 @@ from retarget.train.run_dir import (
     LOCK,
     default_run_name,
     latest_checkpoint,
-    new_run_dir,
     resolve_run,
+    starting_run,
 )
 from retarget.train.runner import Budget, Trainer
 from retarget.train.warm_start import INIT_FROM, warm_start
@@ -109,6 +110,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
                 hint="drop --num-envs (a checkpoint holds every environment's state)",
             )
         resolved = _resume_recipe(run_dir, registry, args.threads)
+        context: AbstractContextManager[Path] = nullcontext(run_dir)
     else:
         # shorthands are recipe overrides, so recipe.lock.yaml records exactly what ran
         flags = []
@@ -128,23 +130,24 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             if "actor" not in groups or c.entry.name in groups["actor"]
         ]
         name = resolved.recipe.name or default_run_name(resolved.character.entry.name, seen)
-        run_dir = new_run_dir(args.runs_dir, name)
-    trainer = Trainer(
-        resolved,
-        run_dir,
-        checkpoint_every=args.checkpoint_every,
-        tensorboard=not args.no_tensorboard,
-        registry=registry,
-    )
-    if args.resume:
-        ckpt = latest_checkpoint(run_dir)
-        trainer.restore(ckpt)
-        out.print(f"resumed {ckpt} at {trainer.progress.env_steps} steps")
-    if args.init_from:
-        start = warm_start(trainer.algorithm, trainer.env.obs_layout, args.init_from, registry)
-        (run_dir / INIT_FROM).write_text(f"{start.checkpoint}\n{start.summary()}\n")
-        trainer.save()  # a resume of this run starts from these weights, not from scratch
-        out.print(f"weights from {start.checkpoint}\n{start.summary()}", markup=False)
+        context = starting_run(args.runs_dir, name)  # removed again if the start fails
+    with context as run_dir:
+        trainer = Trainer(
+            resolved,
+            run_dir,
+            checkpoint_every=args.checkpoint_every,
+            tensorboard=not args.no_tensorboard,
+            registry=registry,
+        )
+        if args.resume:
+            ckpt = latest_checkpoint(run_dir)
+            trainer.restore(ckpt)
+            out.print(f"resumed {ckpt} at {trainer.progress.env_steps} steps")
+        if args.init_from:
+            start = warm_start(trainer.algorithm, trainer.env.obs_layout, args.init_from, registry)
+            (run_dir / INIT_FROM).write_text(f"{start.checkpoint}\n{start.summary()}\n")
+            trainer.save()  # a resume of this run starts from these weights, not from scratch
+            out.print(f"weights from {start.checkpoint}\n{start.summary()}", markup=False)
     out.print(
         f"run directory: {run_dir}  ({trainer.env.num_envs} envs, "
         f"{trainer.env.character.name}, obs {dict(trainer.env.obs_dims)})"

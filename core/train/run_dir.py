@@ -6,6 +6,9 @@ from __future__ import annotations
 
 import datetime as dt
 import os
+import shutil
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
 from pathlib import Path
 
 from retarget.errors import RetargetError
@@ -44,6 +47,31 @@ def new_run_dir(root: str | Path, name: str) -> Path:
     tmp.symlink_to(path.name)
     os.replace(tmp, latest)
     return path
+
+
+@contextmanager
+def starting_run(root: str | Path, name: str) -> Iterator[Path]:
+    """:func:`new_run_dir` for a run about to start: if the block fails (a clip that cannot be
+    read, weights that do not fit), the new directory is removed and ``latest`` points where
+    it pointed before, so a failed start leaves no run behind."""
+    base = Path(root) / name
+    latest = base / "latest"
+    previous = os.readlink(latest) if latest.is_symlink() else None
+    path = new_run_dir(root, name)
+    try:
+        yield path
+    except BaseException:
+        shutil.rmtree(path, ignore_errors=True)
+        if previous is not None:
+            tmp = base / f".latest-{os.getpid()}"
+            tmp.unlink(missing_ok=True)
+            tmp.symlink_to(previous)
+            os.replace(tmp, latest)
+        else:
+            latest.unlink(missing_ok=True)
+            with suppress(OSError):
+                base.rmdir()  # only if nothing else is in it
+        raise
 
 
 def resolve_run(path: str | Path) -> Path:

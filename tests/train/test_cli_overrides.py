@@ -124,3 +124,22 @@ def test_a_run_being_trained_cannot_be_resumed_by_a_second_process(tmp_path: Pat
         holder.wait()
     RunLock(run).acquire().release()  # the lock died with its process (even on SIGKILL)
     assert new_run_dir(tmp_path, "busy") != run  # two runs started at once never share
+
+
+def test_a_failed_start_leaves_no_run_and_keeps_latest(tmp_path: Path, capsys) -> None:
+    recipe = tmp_path / "tiny.yaml"
+    recipe.write_text(TINY)
+    assert main(["train", str(recipe), "--steps", "16", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    before = (tmp_path / "tiny" / "latest").resolve()
+    runs = sorted((tmp_path / "tiny").iterdir())
+    broken = tmp_path / "broken.bvh"
+    broken.write_text("HIERARCHY\nnot a skeleton\n")
+    assert main(["train", str(recipe), "--motions", str(broken), "--steps", "16",
+                 "--runs-dir", str(tmp_path), "--no-tensorboard"]) == 2  # fmt: skip
+    assert "broken.bvh" in capsys.readouterr().err
+    assert (tmp_path / "tiny" / "latest").resolve() == before
+    assert sorted((tmp_path / "tiny").iterdir()) == runs
+    assert main(["train", str(recipe), "--motions", str(broken), "--steps", "16",
+                 "--runs-dir", str(tmp_path / "fresh"), "--no-tensorboard"]) == 2  # fmt: skip
+    assert not (tmp_path / "fresh" / "tiny").exists()
