@@ -150,9 +150,12 @@ def plot(runs: list[Path], png: Path) -> None:
         ("episode_return", "mean episode return"),
         ("action_gap", "student - teacher action MSE (DAgger)"),
     ]
-    fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 4))
+    tables = {run: read_metrics(run) for run in runs}
+    panels = [p for p in panels if any(p[0] in r for rows in tables.values() for r in rows)]
+    fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 4), squeeze=False)
+    axes = axes[0]
     for run in runs:
-        rows = read_metrics(run)
+        rows = tables[run]
         label = run.resolve().parent.name
         minutes = rows[-1]["elapsed_s"] / 60 if rows else 0
         for ax, (key, title) in zip(axes, panels, strict=True):
