@@ -9,7 +9,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from retarget.kinds.scene import Scene
 
 import torch
 
@@ -156,7 +159,7 @@ class StepContext:
     prev_action: torch.Tensor  # (N, nu)
     episode_step: torch.Tensor  # (N,) int64
     dt: float
-    scene: Any = None  # the Scene plugin instance, for observers' batched geometry queries
+    scene: Scene | None = None  # the Scene plugin, for observers' batched geometry queries
 
     @property
     def num_envs(self) -> int:
@@ -164,7 +167,7 @@ class StepContext:
 
     def select(self, idx: torch.Tensor) -> StepContext:
         """The same step restricted to environments ``idx`` (used to check batch invariance)."""
-        scene = self.scene.select(idx) if hasattr(self.scene, "select") else self.scene
+        scene = self.scene.select(idx) if self.scene is not None else None
         return replace(
             self,
             scene=scene,

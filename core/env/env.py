@@ -350,7 +350,7 @@ class RetargetEnv:
             "generator": self.generator.get_state(),
             "nan_resets": self.nan_resets,
             "total_steps": self.total_steps,
-            "scene": self.scene.state_dict() if hasattr(self.scene, "state_dict") else {},
+            "scene": self.scene.state_dict() if self.scene is not None else {},
         }
 
     def load_state_dict(self, state: Mapping) -> dict[str, torch.Tensor]:
@@ -368,7 +368,7 @@ class RetargetEnv:
         self.generator.set_state(state["generator"])
         self.nan_resets = int(state["nan_resets"])
         self.total_steps = int(state["total_steps"])
-        if state.get("scene") and hasattr(self.scene, "load_state_dict"):
+        if state.get("scene") and self.scene is not None:
             self.scene.load_state_dict(state["scene"])
         self._ctx = self._context(self.prev_action)
         return self.observe(self._ctx)

@@ -67,7 +67,7 @@ class RewardManager:
         """Failure penalties of the step (N,), added into the per-term sums too."""
         extra = torch.zeros(failed.shape[0])
         for i, term in enumerate(self.terms.values()):
-            if getattr(term, "on_failure", False):
+            if term.on_failure:
                 value = term.config.weight * term.penalty(failed)
                 self._step_values[:, i] += value
                 extra += value

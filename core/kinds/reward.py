@@ -34,6 +34,9 @@ class RewardTerm(Plugin):
 
     kind: ClassVar[str] = "reward"
     Config: ClassVar[type[PluginConfig]] = RewardConfig
+    on_failure: ClassVar[bool] = False
+    """True for a term paid when an episode fails (``fail_penalty``): the manager then adds
+    ``weight * penalty(failed)`` once the step's failures are known."""
 
     def bind(self, layout: Layout) -> None:
         """Resolve joint/body names and weights to index tensors once."""
@@ -43,3 +46,8 @@ class RewardTerm(Plugin):
 
     def reset(self, env_ids: torch.Tensor) -> None:
         """Forget per-environment state of ``env_ids`` (only stateful terms need this)."""
+
+    def penalty(self, failed: torch.Tensor) -> torch.Tensor:
+        """``(N,)`` unweighted value for the environments whose episode just failed (``failed``
+        ``(N,)`` bool); used only when :attr:`on_failure` is true. Default: nothing."""
+        return torch.zeros(failed.shape[0])

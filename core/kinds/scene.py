@@ -11,7 +11,7 @@ import torch
 from retarget.kinds.base import Plugin
 
 if TYPE_CHECKING:
-    from collections.abc import Sequence
+    from collections.abc import Mapping, Sequence
 
     import mujoco
 
@@ -76,6 +76,13 @@ class Scene(Plugin):
     def select(self, env_ids: torch.Tensor) -> Scene:
         """The scene as seen by environments ``env_ids`` only (static scenes are themselves)."""
         return self
+
+    def state_dict(self) -> dict[str, torch.Tensor]:
+        """Per-environment placement state for checkpoints (static scenes have none)."""
+        return {}
+
+    def load_state_dict(self, state: Mapping[str, torch.Tensor]) -> None:
+        """Restore :meth:`state_dict` (static scenes ignore this)."""
 
     def mocap_bodies(self) -> tuple[str, ...]:
         """Names of the mocap bodies whose poses :meth:`mocap_poses` gives, in that order."""
