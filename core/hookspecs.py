@@ -16,15 +16,24 @@ Example::
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Protocol
 
 import pluggy
+
+if TYPE_CHECKING:
+    from retarget.kinds.base import Plugin
 
 PROJECT = "retarget"
 hookspec = pluggy.HookspecMarker(PROJECT)
 hookimpl = pluggy.HookimplMarker(PROJECT)
 
-Registrar = Any  # Callable[[type[Plugin]], None] with keyword-only name= and aliases=
+class Registrar(Protocol):
+    """What every ``register_*`` hook receives: ``register(cls, name=..., aliases=...)``."""
+
+    def __call__(
+        self, cls: type[Plugin], *, name: str | None = None, aliases: Iterable[str] = ()
+    ) -> None: ...
 
 
 @hookspec
