@@ -76,7 +76,7 @@ group of ``Layout.body_groups`` in its order (computed once per library frame, n
 
 def _select(obj: object, idx: torch.Tensor) -> object:
     """Rows ``idx`` of every tensor field of a frozen dataclass (other fields kept)."""
-    changes = {}
+    changes: dict[str, object] = {}
     for f in fields(obj):  # type: ignore[arg-type]
         value = getattr(obj, f.name)
         if isinstance(value, torch.Tensor) and value.ndim > 0:
