@@ -134,3 +134,13 @@ def test_number_flags_refuse_what_no_run_can_use(argv, needle, capsys) -> None:
         main(argv)
     assert stop.value.code == 2
     assert needle in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("verb", ["train", "eval", "play", "export", "plugins", "recipe"])
+def test_subcommand_help_shows_defaults(verb: str, capsys) -> None:
+    with pytest.raises(SystemExit) as stop:
+        main([verb, "--help"])
+    assert stop.value.code == 0
+    text = capsys.readouterr().out
+    if verb in {"train", "eval", "play"}:
+        assert "(default: " in text

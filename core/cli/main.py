@@ -25,6 +25,31 @@ from retarget.registry import Registry
 EXIT_USER_ERROR = 2
 
 
+class _DefaultsFormatter(argparse.HelpFormatter):
+    """Appends ``(default: X)`` to an option's help unless it already names its default or
+    has none worth saying (None, False, empty)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        default = action.default
+        if (
+            "default" in text
+            or default in (None, False, [], "")
+            or default is argparse.SUPPRESS
+            or not action.option_strings
+        ):
+            return text
+        return f"{text} (default: %(default)s)"
+
+
+class _Parser(argparse.ArgumentParser):
+    """Subcommand parsers whose help shows every option's default."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("formatter_class", _DefaultsFormatter)
+        super().__init__(*args, **kwargs)
+
+
 def build_parser(registry: Registry) -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="retarget",
@@ -37,7 +62,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
         action="store_true",
         help="fail if any plugin cannot be loaded (also RETARGET_STRICT_PLUGINS=1)",
     )
-    sub = parser.add_subparsers(dest="verb", metavar="COMMAND")
+    sub = parser.add_subparsers(dest="verb", metavar="COMMAND", parser_class=_Parser)
     plugins_cmd.add_parser(sub)
     recipe_cmd.add_parser(sub)
     train_cmd.add_parser(sub)
