@@ -37,6 +37,15 @@ sim: {threads: 1}
 """
 
 
+# The tiny recipe as a residual full-body teacher (PD targets, reference + residual actions).
+TINY_TEACHER = (
+    TINY.replace("name: tiny", "name: teacher")
+    .replace("sensors: [three_point]", "sensors: [full_body, reference_action]")
+    .replace("  type: ppo\n", "  type: ppo\n  residual: reference_action\n")
+    .replace("sim: {threads: 1}", "sim: {threads: 1, actuation: pd}")
+)
+
+
 def assert_state_equal(a: Any, b: Any, where: str = "state") -> None:
     """Bit-for-bit equality of nested checkpoint states (tensors, arrays, dicts, lists),
     naming the first differing entry."""

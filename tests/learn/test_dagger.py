@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 import yaml
-from helpers import TINY, assert_state_equal
+from helpers import TINY, TINY_TEACHER, assert_state_equal
 
 from retarget.cli.main import main
 from retarget.learn.dagger import DaggerConfig, DaggerLearner
@@ -22,12 +22,7 @@ from retarget.train.runner import Budget, Trainer
 
 SAMPLES = 4 * 8  # TINY: 4 envs x 8 rollout steps
 
-TEACHER = (
-    TINY.replace("name: tiny", "name: teacher")
-    .replace("sensors: [three_point]", "sensors: [full_body, reference_action]")
-    .replace("  type: ppo\n", "  type: ppo\n  residual: reference_action\n")
-    .replace("sim: {threads: 1}", "sim: {threads: 1, actuation: pd}")
-)
+TEACHER = TINY_TEACHER
 STUDENT = (
     TINY.replace("name: tiny", "name: student")
     .replace("sim: {threads: 1}", "sim: {threads: 1, actuation: pd}")
