@@ -154,14 +154,15 @@ def plot(runs: list[Path], png: Path) -> None:
     panels = [p for p in panels if any(p[0] in r for rows in tables.values() for r in rows)]
     fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 4), squeeze=False)
     axes = axes[0]
-    for run in runs:
+    for i, run in enumerate(runs):  # one colour per run in every panel
         rows = tables[run]
         label = run.resolve().parent.name
         minutes = rows[-1]["elapsed_s"] / 60 if rows else 0
         for ax, (key, title) in zip(axes, panels, strict=True):
             pts = [(r["step"] / 1e6, r[key]) for r in rows if key in r]
             if pts:
-                ax.plot(*zip(*pts, strict=True), label=f"{label} ({minutes:.0f} min)")
+                ax.plot(*zip(*pts, strict=True), color=f"C{i}",
+                        label=f"{label} ({minutes:.0f} min)")  # fmt: skip
             ax.set_title(title)
             ax.set_xlabel("environment steps (millions)")
             ax.grid(alpha=0.3)
