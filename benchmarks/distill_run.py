@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -34,7 +33,9 @@ HELD_OUT = {
     "heldout_jog": ["bandai_d2_run_exhausted_003"],
     "heldout_wave": ["bandai_d2_wave-right-hand_normal_018"],
 }
-REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).parent))
+from learning_run import compare, link_clips, shared_mocap  # noqa: E402  (one definition each)
+
 METRICS = [
     ("success_frame", "succ/frame", "{:.2f}"),
     ("success_20s", "succ 20 s", "{:.2f}"),
@@ -46,29 +47,14 @@ METRICS = [
 ]
 
 
-def shared_mocap() -> Path:
-    default = REPO.parent / "shared" / "data" / "mocap"
-    return Path(os.environ.get("RETARGET_SHARED_DATA", default))
-
-
 def link_split(out: Path) -> dict[str, Path]:
-    """Directories of symbolic links to the shared clips (never copied): train + left out."""
+    """Links to the shared clips (never copied): every clip but the left-out ones trains."""
     source = shared_mocap()
     clips = sorted(p.stem for p in source.glob("*.bvh"))
     if not clips:
         raise SystemExit(f"no .bvh clips in {source} (set RETARGET_SHARED_DATA)")
     held = {s for stems in HELD_OUT.values() for s in stems}
-    split = {"train": [c for c in clips if c not in held], **HELD_OUT}
-    dirs = {}
-    for name, stems in split.items():
-        d = out / "motions" / name
-        d.mkdir(parents=True, exist_ok=True)
-        for stem in stems:
-            link = d / f"{stem}.bvh"
-            if not link.exists():
-                link.symlink_to(source / f"{stem}.bvh")
-        dirs[name] = d
-    return dirs
+    return link_clips(out, {"train": [c for c in clips if c not in held], **HELD_OUT})
 
 
 def retarget(*args: str) -> None:
@@ -212,9 +198,6 @@ def main() -> None:
         for r in args.runs:
             print(f"\n{r}\n" + quality(Path(r), out, args.target, args.stride))
     elif args.stage == "compare":
-        sys.path.insert(0, str(Path(__file__).parent))
-        from learning_run import compare  # one definition of the equal-steps table
-
         print(compare([Path(r) for r in args.runs], args.marks))
     else:
         plot([Path(r) for r in args.runs], Path(args.png))

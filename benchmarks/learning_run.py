@@ -50,10 +50,10 @@ def shared_mocap() -> Path:
     return Path(os.environ.get("RETARGET_SHARED_DATA", default))
 
 
-def link_split(out: Path) -> dict[str, Path]:
-    """Directories of symbolic links to the shared clips (the clips are never copied)."""
+def link_clips(out: Path, split: dict[str, list[str]]) -> dict[str, Path]:
+    """``out/motions/NAME/`` for each part of ``split``: symbolic links to the shared clips
+    (they are never copied)."""
     source = shared_mocap()
-    split = {"train": TRAIN, **HELD_OUT}
     dirs = {}
     for name, stems in split.items():
         d = out / "motions" / name
@@ -64,6 +64,11 @@ def link_split(out: Path) -> dict[str, Path]:
                 link.symlink_to(source / f"{stem}.bvh")
         dirs[name] = d
     return dirs
+
+
+def link_split(out: Path) -> dict[str, Path]:
+    """This benchmark's split: six training walks, and the clips left out."""
+    return link_clips(out, {"train": TRAIN, **HELD_OUT})
 
 
 def retarget(*args: str) -> None:

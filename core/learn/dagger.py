@@ -16,7 +16,6 @@ from __future__ import annotations
 import copy
 import math
 import time
-from collections import deque
 from collections.abc import Mapping
 from typing import Any, Literal
 
@@ -25,6 +24,7 @@ from pydantic import Field
 from torch import nn
 
 from retarget.kinds import PluginConfig, VecEnv
+from retarget.learn.episodes import EpisodeTracker, clone_obs
 from retarget.learn.networks import GaussianActor
 from retarget.learn.normalizer import GroupNormalizer
 from retarget.learn.ppo import DeployedPolicy, torch_threads
@@ -115,10 +115,7 @@ class DaggerLearner:
         self.buffer_next = 0  # next row to write
         self.teacher: nn.Module | None = None
         self.last_obs: dict[str, torch.Tensor] | None = None
-        self.episode_return = torch.zeros(num_envs)
-        self.episode_length = torch.zeros(num_envs, dtype=torch.long)
-        self.finished_returns: deque[float] = deque(maxlen=c.episode_window)
-        self.finished_lengths: deque[float] = deque(maxlen=c.episode_window)
+        self.episodes = EpisodeTracker(num_envs, c.episode_window)
         self.iteration = 0
         self.env_steps = 0
 
@@ -166,7 +163,7 @@ class DaggerLearner:
         obs = self.last_obs
         pending = GroupNormalizer({self.actor_key: self.buffer_obs.shape[1]})
         teacher_acts = torch.rand(self.num_envs, generator=self.generator) < self.beta()
-        gap, finished_r, finished_l = 0.0, [], []
+        gap = 0.0
         for _ in range(c.rollout_steps):
             raw = obs[self.actor_key]
             pending.update({self.actor_key: raw})
@@ -177,25 +174,15 @@ class DaggerLearner:
             action = torch.where(teacher_acts[:, None], label, mean + noise)
             self._store(raw, label)
             next_obs, reward, terminated, truncated, _ = env.step(action)
-            self.episode_return += reward.float()
-            self.episode_length += 1
-            done = terminated.bool() | truncated.bool()
-            if done.any():
-                finished_r.append(self.episode_return[done].clone())
-                finished_l.append(self.episode_length[done].clone())
-                self.episode_return[done] = 0.0
-                self.episode_length[done] = 0
+            self.episodes.step(reward.float(), terminated.bool() | truncated.bool())
             obs = {k: v.float() for k, v in next_obs.items()}
         self.last_obs = obs
         norm = self.obs_norm.groups[self.actor_key]
         norm.merge(*pending.groups[self.actor_key].raw_stats())
-        if finished_r:
-            self.finished_returns.extend(torch.cat(finished_r).tolist())
-            self.finished_lengths.extend(torch.cat(finished_l).float().tolist())
         return {
             "action_gap": gap / c.rollout_steps,  # student vs teacher, on the student's states
             "beta": self.beta(),
-            "episodes_finished": float(sum(len(r) for r in finished_r)),
+            "episodes_finished": float(self.episodes.end_rollout()),
         }
 
     def _store(self, raw: torch.Tensor, label: torch.Tensor) -> None:
@@ -253,9 +240,7 @@ class DaggerLearner:
         stats["collect_steps_per_s"] = samples / max(t1 - t0, 1e-9)
         stats["update_samples_per_s"] = samples / max(t2 - t1, 1e-9)
         stats["collect_seconds"], stats["update_seconds"] = t1 - t0, t2 - t1
-        if self.finished_returns:
-            stats["episode_return"] = sum(self.finished_returns) / len(self.finished_returns)
-            stats["episode_length"] = sum(self.finished_lengths) / len(self.finished_lengths)
+        stats.update(self.episodes.stats())
         return stats
 
     # ------------------------------------------------------------------ checkpoints
@@ -274,13 +259,8 @@ class DaggerLearner:
                 "fill": self.buffer_fill if keep else 0,
                 "next": self.buffer_next if keep else 0,
             },
-            "last_obs": None
-            if self.last_obs is None
-            else {k: v.clone() for k, v in self.last_obs.items()},
-            "episode_return": self.episode_return.clone(),
-            "episode_length": self.episode_length.clone(),
-            "finished_returns": list(self.finished_returns),
-            "finished_lengths": list(self.finished_lengths),
+            "last_obs": clone_obs(self.last_obs),
+            **self.episodes.state_dict(),
             "iteration": self.iteration,
             "env_steps": self.env_steps,
         }
@@ -297,16 +277,8 @@ class DaggerLearner:
             self.buffer_fill, self.buffer_next = int(buffer["fill"]), int(buffer["next"])
         else:
             self.buffer_fill = self.buffer_next = 0
-        last = state["last_obs"]
-        self.last_obs = None if last is None else {k: v.clone() for k, v in last.items()}
-        if state["episode_return"].shape[0] == self.num_envs:
-            self.episode_return = state["episode_return"].clone()
-            self.episode_length = state["episode_length"].clone()
-        else:  # evaluation with another env count: only the policy matters
+        self.last_obs = clone_obs(state["last_obs"])
+        if not self.episodes.load_state_dict(state):  # another env count: only the policy
             self.last_obs = None
-        self.finished_returns.clear()
-        self.finished_returns.extend(state["finished_returns"])
-        self.finished_lengths.clear()
-        self.finished_lengths.extend(state["finished_lengths"])
         self.iteration = int(state["iteration"])
         self.env_steps = int(state["env_steps"])

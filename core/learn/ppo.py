@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import copy
 import time
-from collections import deque
 from collections.abc import Mapping
 from contextlib import contextmanager
 from typing import Any
@@ -29,6 +28,7 @@ from torch import nn
 
 from retarget.kinds import VecEnv
 from retarget.learn.config import PPOConfig
+from retarget.learn.episodes import EpisodeTracker, clone_obs
 from retarget.learn.networks import Critic, GaussianActor
 from retarget.learn.normalizer import GroupNormalizer, RunningNormalizer
 from retarget.learn.storage import RolloutStorage
@@ -122,10 +122,7 @@ class PPOLearner:
         self.optimizer = torch.optim.Adam(params, lr=c.learning_rate)
         self.storage = RolloutStorage(c.rollout_steps, num_envs, dims, action_dim)
         self.last_obs: dict[str, torch.Tensor] | None = None
-        self.episode_return = torch.zeros(num_envs)
-        self.episode_length = torch.zeros(num_envs, dtype=torch.long)
-        self.finished_returns: deque[float] = deque(maxlen=c.episode_window)
-        self.finished_lengths: deque[float] = deque(maxlen=c.episode_window)
+        self.episodes = EpisodeTracker(num_envs, c.episode_window)
         self.iteration = 0
         self.env_steps = 0
 
@@ -172,8 +169,6 @@ class PPOLearner:
                         norm.update(self.last_obs[key])
         obs = self.last_obs
         st.clear()
-        finished_returns: list[torch.Tensor] = []
-        finished_lengths: list[torch.Tensor] = []
         std = self.actor.std()
         term_sums: dict[str, float] = {}  # per reward term: episode sums x finished episodes
         term_count = 0.0
@@ -210,20 +205,13 @@ class PPOLearner:
                 truncated,
                 bootstrap,
             )
-            self.episode_return += reward
-            self.episode_length += 1
-            done = terminated | truncated
+            self.episodes.step(reward, terminated | truncated)
             episode = info.get("episode")
             if episode is not None and "terms" in episode:
                 weight = float(episode["length"].numel())
                 for name, value in episode["terms"].items():
                     term_sums[name] = term_sums.get(name, 0.0) + float(value) * weight
                 term_count += weight
-            if done.any():
-                finished_returns.append(self.episode_return[done].clone())
-                finished_lengths.append(self.episode_length[done].clone())
-                self.episode_return[done] = 0.0
-                self.episode_length[done] = 0
             obs = {k: v.float() for k, v in next_obs.items()}
         self.last_obs = obs
         last_values = self._value(self._normalize(self.critic_key, obs[self.critic_key]))
@@ -233,12 +221,9 @@ class PPOLearner:
                 norm.merge(*pending.groups[key].raw_stats())
         if c.normalize_values:
             self._update_value_stats(st.returns)
-        if finished_returns:
-            self.finished_returns.extend(torch.cat(finished_returns).tolist())
-            self.finished_lengths.extend(torch.cat(finished_lengths).float().tolist())
         stats = {
             "mean_reward": float(st.rewards.mean()),
-            "episodes_finished": float(sum(len(r) for r in finished_returns)),
+            "episodes_finished": float(self.episodes.end_rollout()),
         }
         if term_count:  # mean episode sum of each reward term (the env's info["episode"])
             stats.update({f"episode_{k}": v / term_count for k, v in term_sums.items()})
@@ -338,9 +323,7 @@ class PPOLearner:
         stats["update_samples_per_s"] = samples / max(t3 - t2, 1e-9)
         stats["collect_seconds"] = t1 - t0
         stats["update_seconds"] = t3 - t2
-        if self.finished_returns:
-            stats["episode_return"] = sum(self.finished_returns) / len(self.finished_returns)
-            stats["episode_length"] = sum(self.finished_lengths) / len(self.finished_lengths)
+        stats.update(self.episodes.stats())
         return stats
 
     # ------------------------------------------------------------------ checkpoints
@@ -354,13 +337,8 @@ class PPOLearner:
             "value_norm": self.value_norm.state_dict(),
             "optimizer": self.optimizer.state_dict(),
             "generator": self.generator.get_state(),
-            "last_obs": None
-            if self.last_obs is None
-            else {k: v.clone() for k, v in self.last_obs.items()},
-            "episode_return": self.episode_return.clone(),
-            "episode_length": self.episode_length.clone(),
-            "finished_returns": list(self.finished_returns),
-            "finished_lengths": list(self.finished_lengths),
+            "last_obs": clone_obs(self.last_obs),
+            **self.episodes.state_dict(),
             "iteration": self.iteration,
             "env_steps": self.env_steps,
         }
@@ -372,17 +350,9 @@ class PPOLearner:
         self.value_norm.load_state_dict(state["value_norm"])
         self.optimizer.load_state_dict(state["optimizer"])
         self.generator.set_state(state["generator"])
-        last = state["last_obs"]
-        self.last_obs = None if last is None else {k: v.clone() for k, v in last.items()}
-        if state["episode_return"].shape[0] == self.num_envs:
-            self.episode_return = state["episode_return"].clone()
-            self.episode_length = state["episode_length"].clone()
-        else:  # evaluation with another env count: only the policy matters
+        self.last_obs = clone_obs(state["last_obs"])
+        if not self.episodes.load_state_dict(state):  # another env count: only the policy
             self.last_obs = None
-        self.finished_returns.clear()
-        self.finished_returns.extend(state["finished_returns"])
-        self.finished_lengths.clear()
-        self.finished_lengths.extend(state["finished_lengths"])
         self.iteration = int(state["iteration"])
         self.env_steps = int(state["env_steps"])
 

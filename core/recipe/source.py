@@ -112,7 +112,11 @@ def parse_text(text: str, path: str, suffix: str) -> RecipeSource:
             node = yaml.compose(text, Loader=yaml.SafeLoader)
             if node is not None:
                 _yaml_lines(node, "", lines)  # bounded walk before anything is built
-            data = yaml.load(text, Loader=_UniqueKeyLoader)
+            loader = _UniqueKeyLoader(text)  # a SafeLoader: plain data only
+            try:
+                data = loader.get_single_data()
+            finally:
+                loader.dispose()
         except _TooBig as exc:
             raise RecipeError(f"refused: the recipe {exc}", file=path) from None
         except RecursionError:
