@@ -24,8 +24,8 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from retarget import kinematic as km
-from retarget.body_builder import geom_z_extent
+from retarget.character import kinematic as km
+from retarget.character.builder import geom_z_extent
 from retarget.motion.import_bvh import load_bvh
 from retarget.plugins.characters.dino import Dino
 from retarget.plugins.characters.human import Human

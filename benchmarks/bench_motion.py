@@ -38,7 +38,7 @@ def timed(fn, repeat: int) -> float:
 def control_step_seconds(n: int, threads: int) -> tuple[float, str]:
     from retarget.plugins.characters.human import Human
     from retarget.sim import BatchedSim, SimSettings
-    from retarget.world import build_world
+    from retarget.sim.world import build_world
 
     world = build_world(Human())
     settings = SimSettings(threads=threads)

@@ -18,9 +18,9 @@ import time
 import torch
 
 from retarget.env.build import env_from_recipe
-from retarget.loader import load_plugins
 from retarget.motion.procedural import default_motions
 from retarget.recipe import load
+from retarget.registry.loader import load_plugins
 
 
 def best(fn, repeats: int) -> float:

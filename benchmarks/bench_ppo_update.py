@@ -27,8 +27,8 @@ import torch
 
 from retarget.env.build import env_from_recipe
 from retarget.learn import PPOConfig, PPOLearner, torch_threads
-from retarget.loader import load_plugins
 from retarget.recipe import load
+from retarget.registry.loader import load_plugins
 
 
 def human_env(num_envs: int):
@@ -68,7 +68,7 @@ def time_update(dims: dict[str, int], action_dim: int, samples: int, threads: in
 
 def physics_steps_per_s(num_envs: int = 256, steps: int = 40) -> tuple[float, str]:
     from retarget.sim import BatchedSim, SimSettings
-    from retarget.world import build_world
+    from retarget.sim.world import build_world
 
     human = load_plugins().get("character", "human").cls()
     world = build_world(human)

@@ -30,8 +30,8 @@ import mujoco
 import numpy as np
 import torch
 
-from retarget.loader import load_plugins
 from retarget.recipe import load
+from retarget.registry.loader import load_plugins
 
 
 def per_call_ms(fn, repeats: int) -> float:

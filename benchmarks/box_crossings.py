@@ -27,8 +27,8 @@ from rollout_args import add_rollout_args
 
 from retarget.eval.prop_clearance import foot_clearance, world_boxes
 from retarget.eval.prop_hits import foot_geoms, foot_prop_contacts, prop_geoms
-from retarget.loader import load_plugins
-from retarget.play import copy_env_pose
+from retarget.registry.loader import load_plugins
+from retarget.render.policy_video import copy_env_pose
 from retarget.train.load import load_run
 
 

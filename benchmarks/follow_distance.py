@@ -18,8 +18,8 @@ import numpy as np
 import torch
 from rollout_args import add_rollout_args
 
-from retarget.loader import load_plugins
-from retarget.play import copy_env_pose
+from retarget.registry.loader import load_plugins
+from retarget.render.policy_video import copy_env_pose
 from retarget.train.load import load_run
 
 

@@ -19,8 +19,8 @@ import torch
 
 from retarget.env.build import env_from_recipe
 from retarget.env.env import random_actions
-from retarget.loader import load_plugins
 from retarget.recipe import load
+from retarget.registry.loader import load_plugins
 
 
 def main() -> None:

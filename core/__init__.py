@@ -7,7 +7,6 @@ the step data structures. Everything else is an implementation detail.
 from __future__ import annotations
 
 from retarget.errors import MotionError, PluginError, RecipeError, RetargetError, SimulationError
-from retarget.hookspecs import hookimpl
 from retarget.kinds import (
     Algorithm,
     Character,
@@ -25,8 +24,9 @@ from retarget.kinds import (
     VecEnv,
     gaussian_kernel,
 )
-from retarget.loader import load_plugins
-from retarget.state import Layout, ReferenceBatch, SimState, StepContext
+from retarget.kinds.state import Layout, ReferenceBatch, SimState, StepContext
+from retarget.registry.hookspecs import hookimpl
+from retarget.registry.loader import load_plugins
 
 __version__ = "0.1.0"
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from retarget.loader import load_plugins
+from retarget.registry.loader import load_plugins
 from retarget.testing import parametrize_with_checks
 
 INSTALLED = [entry.cls for entry in load_plugins(strict=True)]

@@ -6,7 +6,7 @@ import tomllib
 
 from helpers import REPO
 
-from retarget.loader import load_plugins
+from retarget.registry.loader import load_plugins
 
 
 def _pyproject() -> dict:

@@ -6,7 +6,7 @@ import pytest
 
 from retarget.cli.main import main
 from retarget.errors import PluginError
-from retarget.loader import PluginLoadWarning, load_plugins
+from retarget.registry.loader import PluginLoadWarning, load_plugins
 
 GOOD = """
 import retarget

@@ -9,9 +9,9 @@ import yaml
 
 import retarget
 from retarget.errors import RecipeError
-from retarget.loader import load_plugins
 from retarget.recipe import load, parse_text, recipe_schema, resolve, write_lock
 from retarget.registry import Registry
+from retarget.registry.loader import load_plugins
 from retarget.testing.fakes import TinyCharacter
 
 
@@ -206,8 +206,8 @@ def test_characters_without_a_recipe_file_get_their_table2_column(tmp_path) -> N
     import torch
 
     from retarget.env.build import env_from_recipe
-    from retarget.loader import load_plugins
     from retarget.recipe import load
+    from retarget.registry.loader import load_plugins
 
     registry = load_plugins()
     for name in ("dino", "oppy"):

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from retarget.character_view import save_video
+from retarget.render.character_view import save_video
 
 
 def frames(count: int = 12) -> list[np.ndarray]:

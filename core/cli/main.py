@@ -19,8 +19,8 @@ from retarget.cli import eval_cmd, export_cmd, play_cmd, plugins_cmd, recipe_cmd
 from retarget.cli.console import error, warning
 from retarget.errors import RetargetError
 from retarget.kinds import Command
-from retarget.loader import PluginLoadWarning, load_plugins, strict_from_env
 from retarget.registry import Registry
+from retarget.registry.loader import PluginLoadWarning, load_plugins, strict_from_env
 
 EXIT_USER_ERROR = 2
 

@@ -8,7 +8,6 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from retarget.character_view import label, save_video
 from retarget.cli.console import out
 from retarget.cli.numbers import amount, count
 from retarget.cli.run_changes import add_run_change_args
@@ -16,8 +15,9 @@ from retarget.errors import RetargetError
 from retarget.motion.device_recording import DeviceRecording, read_recording
 from retarget.motion.device_stream import align_to, resample_stream
 from retarget.motion.procedural import idle_clip
-from retarget.play import render_rollout
 from retarget.registry import Registry
+from retarget.render.character_view import label, save_video
+from retarget.render.policy_video import render_rollout
 from retarget.train.load import load_run, locked_recipe
 from retarget.train.run_dir import resolve_run
 

@@ -5,7 +5,7 @@ One control step, in order (DESIGN.md §5):
 1. actions in [-1, 1] become torques (actuator gear = per-joint limit) for ``substeps``
    physics steps (:class:`~retarget.sim.BatchedSim`);
 2. every environment's reference advances one frame (the library is at the control rate);
-3. a frozen :class:`~retarget.state.StepContext` is built: sim state, reference pose,
+3. a frozen :class:`~retarget.kinds.state.StepContext` is built: sim state, reference pose,
    device window, contact labels, privileged future frames;
 4. rewards (weighted sum, per-term logs), terminations (failure vs time-out; a clip's end is
    a time-out), failure penalties;
@@ -40,12 +40,12 @@ from retarget.env.observations import (
 from retarget.env.reference import CharacterReference
 from retarget.errors import PluginError, RecipeError
 from retarget.kinds import Character, Observer, RewardTerm, Scene, Sensor, Termination
+from retarget.kinds.state import SCENE_CONTACTS, ReferenceBatch, StepContext
 from retarget.motion.clip import MotionClip
 from retarget.motion.library import MotionLibrary
 from retarget.motion.resample import resample
 from retarget.sim import BatchedSim, SimSettings
-from retarget.state import SCENE_CONTACTS, ReferenceBatch, StepContext
-from retarget.world import build_world
+from retarget.sim.world import build_world
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ import torch
 
 from retarget.errors import PluginError
 from retarget.kinds import RewardTerm, Termination
-from retarget.state import StepContext
+from retarget.kinds.state import StepContext
 
 
 class RewardManager:

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import torch
 
-from retarget.heading import heading_cos_sin, quat_to_6d, unyaw
-from retarget.state import Layout, StepContext
+from retarget.geometry.heading import heading_cos_sin, quat_to_6d, unyaw
+from retarget.kinds.state import Layout, StepContext
 
 FUTURE_POS = "future_body_pos"
 """``ctx.ref.extras`` key: reference body positions at the privileged offsets ``(N, F, B, 3)``."""

@@ -3,7 +3,7 @@
 Every library frame gets the kinematically retargeted character pose (``qpos``), its
 velocities (finite differences at the control rate), the world poses of the bodies and role
 sites (MuJoCo forward kinematics) and its scene contact labels per body group
-(:mod:`retarget.env.scene_contacts`). At run time a step's reference is pure indexing into these
+(:mod:`retarget.scene.contacts`). At run time a step's reference is pure indexing into these
 flat arrays with the library's ``(N,)`` row indices: no kinematics and no loops per step.
 """
 
@@ -15,13 +15,13 @@ import mujoco
 import numpy as np
 import torch
 
-from retarget.env.scene_contacts import DEFAULT_MARGIN, scene_contact_labels
+from retarget.character.kinematic import retarget_clip
 from retarget.errors import PluginError
 from retarget.kinds import Character
-from retarget.kinematic import retarget_clip
+from retarget.kinds.state import Layout, SimState
 from retarget.motion.clip import MotionClip
+from retarget.scene.contacts import DEFAULT_MARGIN, scene_contact_labels
 from retarget.sim.batched import body_velocities
-from retarget.state import Layout, SimState
 
 
 def _velocities(model: mujoco.MjModel, qpos: np.ndarray, fps: float) -> np.ndarray:

@@ -23,10 +23,10 @@ from dataclasses import dataclass
 
 import torch
 
-from retarget.env.scene_contacts import CONTACT_LINKS
-from retarget.env.scene_contacts import CONTACT_NEWTONS as LINK_NEWTONS
-from retarget.heading import rotation_distance
-from retarget.state import SCENE_CONTACTS, Layout, StepContext
+from retarget.geometry.heading import rotation_distance
+from retarget.kinds.state import SCENE_CONTACTS, Layout, StepContext
+from retarget.scene.contacts import CONTACT_LINKS
+from retarget.scene.contacts import CONTACT_NEWTONS as LINK_NEWTONS
 
 CONTACT_NEWTONS = 1.0
 

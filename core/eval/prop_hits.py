@@ -5,7 +5,7 @@ lifts its feet over them. From MuJoCo's contact list, a step counts as a *top* s
 foot geom pushes on a prop geom (normal force above ``newtons``) through a mostly vertical
 contact normal (``|n_z| >= cos 45 deg``: stepping onto the box), and as a *side* hit when the
 normal is mostly horizontal (the foot runs into the box's side: a stumble). Props are the
-geoms of mocap bodies and of bodies hinged to them (:mod:`retarget.plugins.scenes.props`);
+geoms of mocap bodies and of bodies hinged to them (:mod:`retarget.scene.props`);
 the floor and the character's other bodies never count.
 """
 
@@ -16,7 +16,7 @@ import math
 import mujoco
 import numpy as np
 
-from retarget.state import Layout
+from retarget.kinds.state import Layout
 
 HIT_NEWTONS = 1.0
 """Normal force above which a foot-prop contact counts."""

@@ -1,6 +1,6 @@
 """The two things every plugin has: a ``name`` and a strict, frozen pydantic ``Config``.
 
-Plugins are classes, registered through hooks (``retarget.hookspecs``). Configuration is
+Plugins are classes, registered through hooks (``retarget.registry.hookspecs``). Configuration is
 validated when a recipe is loaded, before anything expensive is built, so that a typo fails in
 the first second with the file, field and plugin named, rather than after an hour of training.
 """

@@ -11,7 +11,7 @@ from retarget.kinds.base import Plugin
 if TYPE_CHECKING:
     import mujoco
 
-    from retarget.joint_map import JointMap
+    from retarget.character.joint_map import JointMap
 
 REQUIRED_SITES: tuple[str, ...] = ("head", "left_hand", "right_hand", "root")
 """Role sites every character provides: the headset mount, controller mounts and the root."""
@@ -57,6 +57,6 @@ class Character(Plugin):
         """How human joints drive this character's joints in kinematic retargeting.
 
         ``None`` (the default) means the character cannot be retargeted kinematically; see
-        :mod:`retarget.joint_map`.
+        :mod:`retarget.character.joint_map`.
         """
         return None

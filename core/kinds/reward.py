@@ -11,7 +11,7 @@ from pydantic import Field
 from retarget.kinds.base import Plugin, PluginConfig
 
 if TYPE_CHECKING:
-    from retarget.state import Layout, StepContext
+    from retarget.kinds.state import Layout, StepContext
 
 
 def gaussian_kernel(distance: torch.Tensor, k: float) -> torch.Tensor:

@@ -11,7 +11,7 @@ import torch
 from retarget.kinds.base import Plugin
 
 if TYPE_CHECKING:
-    from retarget.state import Layout, StepContext
+    from retarget.kinds.state import Layout, StepContext
 
 
 @dataclass(frozen=True)

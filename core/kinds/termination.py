@@ -10,7 +10,7 @@ from retarget.kinds.base import Plugin
 if TYPE_CHECKING:
     import torch
 
-    from retarget.state import Layout, StepContext
+    from retarget.kinds.state import Layout, StepContext
 
 
 class Termination(Plugin):

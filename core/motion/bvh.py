@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from retarget.errors import MotionError
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 
 CHANNEL_NAMES = {
     "xposition": "Xposition",

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 from retarget.motion.canonicalize import UNITS, up_axis_matrix
 from retarget.motion.clip import MotionClip

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from retarget.errors import MotionError
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 from retarget.motion.clip import MotionClip, local_from_global
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 
 

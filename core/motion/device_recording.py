@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from retarget.errors import MotionError
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion.devices import DEVICES
 
 FORMAT = "retarget-devices"

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion.device_recording import DeviceRecording
 
 

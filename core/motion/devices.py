@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 
 DEVICES: tuple[str, str, str] = ("hmd", "left", "right")

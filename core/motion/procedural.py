@@ -17,7 +17,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 from retarget.motion.clip import MotionClip, local_from_global
 from retarget.motion.contacts import label_contacts

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion.clip import MotionClip
 
 CONTROL_RATE = 36.0

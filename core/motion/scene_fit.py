@@ -23,7 +23,7 @@ from typing import Literal
 
 import numpy as np
 
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 from retarget.motion.clip import MotionClip
 from retarget.motion.contacts import SPEED_THRESHOLD, foot_speeds

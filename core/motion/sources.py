@@ -79,7 +79,7 @@ def load_motions(
 
 def default_formats() -> dict[str, MotionFormat]:
     """One default-configured instance of every registered motion format."""
-    from retarget.loader import load_plugins
+    from retarget.registry.loader import load_plugins
 
     registry = load_plugins()
     return {

@@ -39,7 +39,7 @@ def apply_actuation(
     """Make ``model``'s joint actuators act as ``mode`` (see module doc); in place.
 
     Only actuators that drive one hinge with a force limit are converted (the ones
-    :mod:`retarget.body_builder` creates); other actuators are left alone.
+    :mod:`retarget.character.builder` creates); other actuators are left alone.
     """
     if mode not in ACTUATIONS:
         raise ValueError(f"unknown actuation {mode!r}; choose one of {', '.join(ACTUATIONS)}")

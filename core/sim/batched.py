@@ -21,8 +21,8 @@ import numpy as np
 import torch
 from mujoco.batch import Batch
 
+from retarget.kinds.state import Layout, SimState
 from retarget.sim.actuation import Actuation, apply_actuation
-from retarget.state import Layout, SimState
 
 T = TypeVar("T")
 
@@ -84,7 +84,7 @@ class BatchedSim:
     """N environments of one model; ``step`` applies actions in [-1, 1] for one control step.
 
     The model must have been compiled with :func:`add_contact_force_sensor` for
-    ``contact_force`` to be meaningful (``retarget.world.build_world`` does this).
+    ``contact_force`` to be meaningful (``retarget.sim.world.build_world`` does this).
     """
 
     def __init__(

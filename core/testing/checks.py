@@ -23,17 +23,17 @@ import torch
 import yaml
 from pydantic import ValidationError
 
-from retarget import hookspecs
-from retarget.checkpoint import SAFE_GLOBALS
 from retarget.errors import MotionError
 from retarget.kinds import KINDS, Plugin, PluginConfig
 from retarget.kinds.base import NAME_RE
-from retarget.loader import load_plugins
 from retarget.motion.clip import MotionClip
 from retarget.motion.skeleton import NUM_JOINTS
+from retarget.registry import hookspecs
+from retarget.registry.loader import load_plugins
+from retarget.sim.world import build_world
 from retarget.testing.fakes import FakeVecEnv, TinyCharacter, fake_context, tiny_world
 from retarget.testing.guard import NoPerEnvLoops
-from retarget.world import build_world
+from retarget.train.checkpoint import SAFE_GLOBALS
 
 Check = Callable[[object], None]
 BATCH_SIZES = (1, 4, 7)

@@ -15,8 +15,9 @@ import numpy as np
 import torch
 
 from retarget.kinds import Character, Scene
-from retarget.state import SCENE_CONTACTS, Layout, ReferenceBatch, SimState, StepContext
-from retarget.world import World, add_floor, build_world
+from retarget.kinds.state import SCENE_CONTACTS, Layout, ReferenceBatch, SimState, StepContext
+from retarget.scene.floor import add_floor
+from retarget.sim.world import World, build_world
 
 _CAPSULE = mujoco.mjtGeom.mjGEOM_CAPSULE
 _HINGE = mujoco.mjtJoint.mjJNT_HINGE

@@ -9,11 +9,11 @@ from collections.abc import Callable
 
 import pytest
 
-from retarget.loader import load_plugins
+from retarget.kinds.state import StepContext
 from retarget.registry import Registry
-from retarget.state import StepContext
+from retarget.registry.loader import load_plugins
+from retarget.sim.world import World
 from retarget.testing.fakes import fake_context, tiny_world
-from retarget.world import World
 
 
 @pytest.fixture

@@ -9,7 +9,6 @@ from pathlib import Path
 
 import yaml
 
-from retarget.checkpoint import load_checkpoint
 from retarget.env import RetargetEnv
 from retarget.env.build import env_from_recipe
 from retarget.errors import RecipeError
@@ -17,6 +16,7 @@ from retarget.kinds import Algorithm
 from retarget.motion.clip import MotionClip
 from retarget.recipe import ResolvedRecipe, apply_overrides, parse_text, resolve
 from retarget.registry import Registry
+from retarget.train.checkpoint import load_checkpoint
 from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
 
 

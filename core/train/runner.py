@@ -22,12 +22,12 @@ from typing import Any
 import numpy as np
 import torch
 
-from retarget.checkpoint import load_checkpoint, save_checkpoint
 from retarget.env.build import env_from_recipe
 from retarget.errors import RecipeError, SimulationError
 from retarget.kinds import Algorithm
 from retarget.recipe import ResolvedRecipe, write_lock
 from retarget.registry import Registry
+from retarget.train.checkpoint import load_checkpoint, save_checkpoint
 from retarget.train.logger import MetricsLogger
 from retarget.train.run_dir import CHECKPOINTS, RunLock
 

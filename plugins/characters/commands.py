@@ -9,7 +9,6 @@ sites (headset, controllers, root) visible. ``retarget character retarget CLIP -
 from __future__ import annotations
 
 import argparse
-import os
 from pathlib import Path
 from typing import Any
 
@@ -17,8 +16,6 @@ import numpy as np
 
 import retarget
 from retarget import Command, RetargetError
-
-os.environ.setdefault("MUJOCO_GL", "osmesa")  # offscreen rendering without a display
 
 
 def _parse_sets(pairs: list[str]) -> dict[str, Any]:
@@ -95,7 +92,7 @@ def show(character: Any, out: Path, width: int = 960, height: int = 720) -> None
     """Rest pose with sites, labelled with name, height, mass, links and DoF."""
     import mujoco
 
-    from retarget import character_view as cv
+    from retarget.render import character_view as cv
 
     spec = character.build_spec()
     model = cv.scene_with([(character.name, spec)], spacing=0.0)
@@ -113,7 +110,7 @@ def show(character: Any, out: Path, width: int = 960, height: int = 720) -> None
 def _extent(model: Any) -> tuple[float, float]:
     import mujoco
 
-    from retarget.body_builder import geom_z_extent
+    from retarget.character.builder import geom_z_extent
 
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
@@ -125,9 +122,9 @@ def retarget_video(character: Any, clip: Any, out: Path, width: int, height: int
     """Human (the ``human`` character at the subject's height) beside the retargeted character."""
     import mujoco
 
-    from retarget import character_view as cv
-    from retarget import kinematic as km
+    from retarget.character import kinematic as km
     from retarget.plugins.characters.human import Human
+    from retarget.render import character_view as cv
 
     human = Human(Human.Config(height=float(np.clip(clip.height, 0.6, 2.4))))
     h_model = human.build_spec().compile()

@@ -1,6 +1,6 @@
 """What the built-in characters share: a config base and a ``Character`` built with BodyBuilder.
 
-Only public API is used here (``retarget.body_builder``, ``retarget.joint_map``,
+Only public API is used here (``retarget.character.builder``, ``retarget.character.joint_map``,
 ``retarget.motion.skeleton``), so a third-party character package can copy this pattern.
 """
 
@@ -14,8 +14,8 @@ import mujoco
 from pydantic import Field
 
 from retarget import Character, PluginConfig, RecipeError
-from retarget.body_builder import BodyBuilder, BuiltCharacter
-from retarget.joint_map import JointMap
+from retarget.character.builder import BodyBuilder, BuiltCharacter
+from retarget.character.joint_map import JointMap
 from retarget.motion import skeleton as sk
 
 

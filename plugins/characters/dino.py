@@ -8,7 +8,7 @@ from typing import Literal
 from pydantic import Field
 
 import retarget
-from retarget.body_builder import (
+from retarget.character.builder import (
     BodyBuilder,
     Box,
     Capsule,
@@ -19,7 +19,7 @@ from retarget.body_builder import (
     hinge,
     joint,
 )
-from retarget.joint_map import JointLink, JointMap, elbow_link
+from retarget.character.joint_map import JointLink, JointMap, elbow_link
 
 from .common import CharacterConfig, ProceduralCharacter, scaled
 

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from retarget.body_builder import BodyBuilder, Box, Capsule, Joint, Sphere, ball, hinge, joint
-from retarget.joint_map import JointLink, JointMap, elbow_link
+from retarget.character.builder import BodyBuilder, Box, Capsule, Joint, Sphere, ball, hinge, joint
+from retarget.character.joint_map import JointLink, JointMap, elbow_link
 from retarget.motion import skeleton as sk
 
 from .common import scaled

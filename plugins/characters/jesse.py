@@ -7,8 +7,8 @@ from collections.abc import Mapping, Sequence
 from pydantic import Field
 
 import retarget
-from retarget.body_builder import BodyBuilder
-from retarget.joint_map import JointMap
+from retarget.character.builder import BodyBuilder
+from retarget.character.joint_map import JointMap
 
 from .common import CharacterConfig, ProceduralCharacter
 from .humanoid import (

@@ -7,8 +7,8 @@ from collections.abc import Mapping, Sequence
 from pydantic import Field
 
 import retarget
-from retarget.body_builder import BodyBuilder, Box, Capsule, Ellipsoid, Sphere, ball, joint
-from retarget.joint_map import JointLink, JointMap, elbow_link
+from retarget.character.builder import BodyBuilder, Box, Capsule, Ellipsoid, Sphere, ball, joint
+from retarget.character.joint_map import JointLink, JointMap, elbow_link
 
 from .common import CharacterConfig, ProceduralCharacter, scaled
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 
@@ -135,8 +134,7 @@ class MotionCommand(Command):
         return 0
 
     def _show(self, args: argparse.Namespace) -> int:
-        os.environ.setdefault("MUJOCO_GL", "osmesa")
-        from retarget.motion.render import contact_sheet, render_frames, write_png
+        from retarget.render.motion import contact_sheet, render_frames, write_png
 
         out = Path(args.out)
         suffix = out.suffix.lower()

@@ -11,7 +11,7 @@ from pydantic import Field
 
 import retarget
 from retarget import MotionFormat, PluginConfig
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 from retarget.motion.bvh_write import write_bvh
 from retarget.motion.clip import MotionClip

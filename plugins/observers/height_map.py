@@ -22,7 +22,7 @@ from pydantic import Field
 
 import retarget
 from retarget import Layout, Observer, ObsSpec, PluginConfig, StepContext
-from retarget.heading import heading_cos_sin
+from retarget.geometry.heading import heading_cos_sin
 
 
 class HeightMapConfig(PluginConfig):

@@ -32,7 +32,7 @@ from pydantic import Field
 
 import retarget
 from retarget import Layout, Observer, ObsSpec, PluginConfig, StepContext
-from retarget.heading import heading_cos_sin, unyaw
+from retarget.geometry.heading import heading_cos_sin, unyaw
 
 
 class PointCloudConfig(PluginConfig):

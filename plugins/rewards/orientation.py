@@ -14,7 +14,7 @@ from pydantic import Field
 
 import retarget
 from retarget import Layout, RewardConfig, RewardTerm, StepContext, gaussian_kernel
-from retarget.heading import rotation_distance
+from retarget.geometry.heading import rotation_distance
 
 
 class OrientationConfig(RewardConfig):

@@ -7,7 +7,7 @@ Euclidean norm (not squared), so for 0/1 vectors ``d = sqrt(#mismatches)``.
 
 ``c_ref`` are the reference's scene contact labels (``ref.extras[SCENE_CONTACTS]``): collision
 checks of the kinematic reference against the un-randomized scene, computed once per library
-frame (:mod:`retarget.env.scene_contacts`). ``c_sim``: a group is in contact when the contact
+frame (:mod:`retarget.scene.contacts`). ``c_sim``: a group is in contact when the contact
 force on its bodies (summed: a foot split into heel and toes is one link) exceeds
 ``force_threshold``. The paper "ignores contacts of magnitudes lower than 50 N in the gravity
 (i.e. upward) direction", read here literally as the default ``measure="up"``: the upward (+Z)
@@ -26,9 +26,9 @@ from pydantic import Field
 
 import retarget
 from retarget import Layout, PluginError, RewardConfig, RewardTerm, StepContext, gaussian_kernel
-from retarget.env.scene_contacts import CONTACT_LINKS as LINKS
-from retarget.env.scene_contacts import CONTACT_NEWTONS
-from retarget.state import SCENE_CONTACTS
+from retarget.kinds.state import SCENE_CONTACTS
+from retarget.scene.contacts import CONTACT_LINKS as LINKS
+from retarget.scene.contacts import CONTACT_NEWTONS
 
 
 class SceneContactConfig(RewardConfig):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import retarget
-from retarget.plugins.scenes.props import Prop, PropScene, box
+from retarget.scene.props import Prop, PropScene, box
 
 LENGTH = 1.2  # along y: people sit side by side
 DEPTH = 0.35

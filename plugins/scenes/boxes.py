@@ -14,7 +14,7 @@ from pydantic import Field
 
 import retarget
 from retarget.kinds import PluginConfig
-from retarget.plugins.scenes.props import Prop, PropScene, PropSceneConfig, box
+from retarget.scene.props import Prop, PropScene, PropSceneConfig, box
 
 
 class BoxSpec(PluginConfig):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import retarget
-from retarget.plugins.scenes.props import Part, Prop, PropScene, box
+from retarget.scene.props import Part, Prop, PropScene, box
 
 SEAT = 0.45  # seat width and depth
 SEAT_TOP = 0.46

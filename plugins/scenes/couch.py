@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import retarget
-from retarget.plugins.scenes.props import Prop, PropScene, box
+from retarget.scene.props import Prop, PropScene, box
 
 WIDTH = 2.0  # along y
 DEPTH = 0.9  # along x, front at +x

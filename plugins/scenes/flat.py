@@ -9,7 +9,7 @@ from pydantic import Field
 
 import retarget
 from retarget.kinds import PluginConfig, Scene
-from retarget.world import add_floor
+from retarget.scene.floor import add_floor
 
 
 class FlatConfig(PluginConfig):

@@ -16,8 +16,8 @@ from retarget.plugins.scenes.bench import Bench
 from retarget.plugins.scenes.boxes import Boxes
 from retarget.plugins.scenes.chair import Chair
 from retarget.plugins.scenes.couch import Couch
-from retarget.plugins.scenes.props import Prop, PropScene, PropSceneConfig
 from retarget.plugins.scenes.stool import Stool
+from retarget.scene.props import Prop, PropScene, PropSceneConfig
 
 LAYOUT: tuple[tuple[type[PropScene], tuple[float, float], float], ...] = (
     (Couch, (0.0, 2.2), -math.pi / 2),

@@ -31,7 +31,7 @@ from pydantic import Field
 import retarget
 from retarget.errors import PluginError
 from retarget.kinds import PluginConfig, Scene
-from retarget.world import add_floor
+from retarget.scene.floor import add_floor
 
 RAY_START = 100.0  # metres above the mesh top where the rasterising rays start
 

@@ -31,7 +31,7 @@ from retarget.errors import PluginError
 from retarget.kinds import PluginConfig
 from retarget.motion.clip import MotionClip
 from retarget.motion.scene_fit import FittedProp, fit_props
-from retarget.plugins.scenes.props import Prop, PropScene, Randomization, box
+from retarget.scene.props import Prop, PropScene, Randomization, box
 
 
 class PropSpec(PluginConfig):

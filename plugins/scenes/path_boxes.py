@@ -7,7 +7,7 @@ instead of stumbling. Every episode, ``count`` boxes of random height (``height`
 episode starts (uniform in distance walked, not in time, so standing still does not pile boxes
 up), turned to face the walking direction and shifted sideways by up to ``lateral``.
 
-Boxes are mocap bodies like every prop scene's (:mod:`retarget.plugins.scenes.props`): one box
+Boxes are mocap bodies like every prop scene's (:mod:`retarget.scene.props`): one box
 of the greatest height per slot, sunk into the floor to get a lower one, placed per
 environment from the clip and start time :meth:`Scene.start_episodes` reports at each reset.
 In the compiled model (what the reference contact labels are computed against) every box is
@@ -26,7 +26,7 @@ from pydantic import Field, model_validator
 import retarget
 from retarget.kinds import PluginConfig
 from retarget.motion.clip import MotionClip
-from retarget.plugins.scenes.props import Prop, PropScene, Randomization, box
+from retarget.scene.props import Prop, PropScene, Randomization, box
 
 PARK = (-50.0, -50.0)
 """Where boxes stand in the compiled model and when unused: far from any motion."""

@@ -11,7 +11,7 @@ from __future__ import annotations
 from pydantic import Field
 
 import retarget
-from retarget.plugins.scenes.props import Hinge, Prop, PropScene, PropSceneConfig, box, cylinder
+from retarget.scene.props import Hinge, Prop, PropScene, PropSceneConfig, box, cylinder
 
 BASE_RADIUS = 0.30
 BASE_THICK = 0.05

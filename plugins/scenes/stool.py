@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import retarget
-from retarget.plugins.scenes.props import Prop, PropScene, cylinder
+from retarget.scene.props import Prop, PropScene, cylinder
 
 RADIUS = 0.17
 SEAT_TOP = 0.45

@@ -10,7 +10,7 @@ from pydantic import Field
 
 import retarget
 from retarget.plugins.scenes.chair import SEAT_THICK, SEAT_TOP, legs, seat_and_back
-from retarget.plugins.scenes.props import Hinge, Prop, PropScene, PropSceneConfig
+from retarget.scene.props import Hinge, Prop, PropScene, PropSceneConfig
 
 
 class TiltingChairConfig(PropSceneConfig):

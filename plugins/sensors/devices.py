@@ -3,8 +3,8 @@
 The reference carries device poses over a time window (``ref.devices`` ``(N, W, D, 7)``:
 headset, left, right controller; position + ``wxyz``; ``ref.window_offsets`` the frame offset of
 each of the W entries, 0 being now). A sensor picks the frames ``-past .. +future`` from it and
-expresses them in the *simulated* character's heading frame (:mod:`retarget.heading`): rotated
-by the inverse of the root's yaw and moved to the root's ground projection, heights kept as
+expresses them in the *simulated* character's heading frame (:mod:`retarget.geometry.heading`):
+rotated by the inverse of the root's yaw and moved to the root's ground projection, heights kept as
 world heights. Orientations are given as 6D rotations. The layout of one observation is
 frame-major: for each frame (oldest first), each device's position then its 6D rotation.
 
@@ -19,7 +19,7 @@ from pydantic import Field
 
 import retarget
 from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
-from retarget.heading import ground_origin, heading_cos_sin, quat_to_6d, unyaw
+from retarget.geometry.heading import ground_origin, heading_cos_sin, quat_to_6d, unyaw
 
 DEVICES = ("headset", "left", "right")
 """Device order along the ``D`` axis of ``ref.devices``."""

@@ -19,7 +19,7 @@ from pydantic import Field, field_validator
 
 import retarget
 from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
-from retarget.heading import (
+from retarget.geometry.heading import (
     ground_origin,
     heading_cos_sin,
     quat_conj,

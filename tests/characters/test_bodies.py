@@ -12,7 +12,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).parent))
 from _characters_common import BUILT_DOF, CHARACTERS, TABLE1
 
-from retarget.body_builder import CHARACTER_CONAFFINITY, CHARACTER_CONTYPE, geom_z_extent
+from retarget.character.builder import CHARACTER_CONAFFINITY, CHARACTER_CONTYPE, geom_z_extent
 from retarget.kinds.character import REQUIRED_GROUPS, REQUIRED_SITES
 from retarget.plugins.characters.dino import Dino
 from retarget.plugins.characters.jesse import Jesse

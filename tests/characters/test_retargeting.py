@@ -13,9 +13,9 @@ sys.path.insert(0, str(Path(__file__).parent))
 from _characters_common import CHARACTERS, clips
 
 from retarget import RecipeError
-from retarget import kinematic as km
-from retarget.joint_map import JointLink, JointMap, euler_intrinsic, quat_to_matrix
-from retarget.motion import rotations as rot
+from retarget.character import kinematic as km
+from retarget.character.joint_map import JointLink, JointMap, euler_intrinsic
+from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 from retarget.motion.clip import MotionClip
 from retarget.motion.import_bvh import load_bvh
@@ -37,7 +37,7 @@ def test_hinges_compose_as_the_joint_map_decomposes() -> None:
         mujoco.mj_kinematics(m, d)
         body = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "l_thigh")
         rel = rot.mul(rot.conj(d.xquat[m.body_parentid[body]]), d.xquat[body])
-        got = euler_intrinsic(quat_to_matrix(rel[None]), group.axes)[0]
+        got = euler_intrinsic(rot.to_matrix(rel[None]), group.axes)[0]
         assert np.allclose(got, angles, atol=1e-9)
 
 

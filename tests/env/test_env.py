@@ -13,12 +13,12 @@ from retarget.env import EnvOptions, RetargetEnv, random_actions
 from retarget.env.build import env_from_recipe
 from retarget.env.observations import privileged, proprio
 from retarget.errors import RecipeError
-from retarget.heading import quat_mul, yaw_quat
-from retarget.loader import load_plugins
+from retarget.geometry.heading import quat_mul, yaw_quat
+from retarget.kinds.state import SimState
 from retarget.motion.procedural import default_motions
 from retarget.recipe import load
+from retarget.registry.loader import load_plugins
 from retarget.sim import SimSettings
-from retarget.state import SimState
 
 REGISTRY = load_plugins(strict=True)
 

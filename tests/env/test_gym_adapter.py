@@ -9,8 +9,8 @@ gymnasium = pytest.importorskip("gymnasium", reason="the 'gym' extra is not inst
 
 from retarget.env.build import env_from_recipe  # noqa: E402
 from retarget.env.gym import GymVectorEnv  # noqa: E402
-from retarget.loader import load_plugins  # noqa: E402
 from retarget.recipe import load  # noqa: E402
+from retarget.registry.loader import load_plugins  # noqa: E402
 
 
 def test_gym_vector_env_contract() -> None:

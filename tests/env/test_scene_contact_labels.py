@@ -8,12 +8,12 @@ import torch
 
 from retarget.env import EnvOptions, RetargetEnv
 from retarget.env.reference import CharacterReference
+from retarget.kinds.state import SCENE_CONTACTS
 from retarget.motion.procedural import default_motions
 from retarget.motion.resample import resample
 from retarget.plugins.characters.human import Human
 from retarget.plugins.scenes.stool import Stool
-from retarget.state import SCENE_CONTACTS
-from retarget.world import build_world
+from retarget.sim.world import build_world
 
 SIT = resample(default_motions(names=("sit_stand",))[0], 30)
 STILL = {"position": 0.0, "yaw": 0.0}

@@ -13,10 +13,10 @@ from retarget.cli.eval_cmd import table
 from retarget.env import EnvOptions, RetargetEnv
 from retarget.eval import EvalSettings, evaluate
 from retarget.eval.metrics import MetricProbe
+from retarget.kinds.state import SCENE_CONTACTS
 from retarget.motion.procedural import default_motions
 from retarget.plugins.characters.human import Human
 from retarget.plugins.scenes.motion_props import MotionProps
-from retarget.state import SCENE_CONTACTS
 from retarget.testing import fake_context
 
 IDLE, SIT = default_motions(names=("idle", "sit_stand"))

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 import torch
 
-from retarget.checkpoint import load_checkpoint, save_checkpoint
 from retarget.errors import RetargetError
+from retarget.train.checkpoint import load_checkpoint, save_checkpoint
 
 
 def test_round_trip_is_exact(tmp_path: Path) -> None:
@@ -55,7 +55,7 @@ def test_unreadable_checkpoint_names_the_file(tmp_path: Path) -> None:
 WRITER = textwrap.dedent(
     """
     import sys, torch
-    from retarget.checkpoint import save_checkpoint
+    from retarget.train.checkpoint import save_checkpoint
     big = {"weights": torch.ones(150_000_000 // 4 * 2)}  # ~300 MB: a write takes a while
     save_checkpoint(sys.argv[1], big)
     """

@@ -14,8 +14,8 @@ from helpers import TINY, TINY_TEACHER, assert_state_equal
 
 from retarget.cli.main import main
 from retarget.learn.dagger import DaggerConfig, DaggerLearner
-from retarget.loader import load_plugins
 from retarget.recipe import load
+from retarget.registry.loader import load_plugins
 from retarget.train.load import load_run, prepared_recipe
 from retarget.train.run_dir import new_run_dir
 from retarget.train.runner import Budget, Trainer

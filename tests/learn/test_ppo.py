@@ -8,10 +8,10 @@ import pytest
 import torch
 from helpers import assert_state_equal
 
-from retarget.checkpoint import load_checkpoint, save_checkpoint
 from retarget.learn import PPOConfig, PPOLearner, torch_threads
-from retarget.loader import load_plugins
+from retarget.registry.loader import load_plugins
 from retarget.testing.fakes import FakeVecEnv
+from retarget.train.checkpoint import load_checkpoint, save_checkpoint
 
 TINY = dict(
     rollout_steps=16,

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import torch
 
-from retarget.checkpoint import load_checkpoint, save_checkpoint
 from retarget.errors import RetargetError
+from retarget.train.checkpoint import load_checkpoint, save_checkpoint
 
 
 class _Payload:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion.device_recording import DeviceRecording
 from retarget.motion.device_stream import align_to, hold_untracked, resample_stream
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from retarget.errors import MotionError
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 from retarget.motion.clip import MotionClip
 from retarget.motion.device_recording import (

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from retarget.errors import MotionError
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 from retarget.motion.floor import foot_points
 from retarget.motion.mirror import mirror

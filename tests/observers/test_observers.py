@@ -8,7 +8,7 @@ from dataclasses import replace
 import pytest
 import torch
 
-from retarget.heading import yaw_quat
+from retarget.geometry.heading import yaw_quat
 from retarget.plugins.observers.height_map import HeightMap, circular_grid
 from retarget.plugins.observers.point_cloud import PointCloud
 from retarget.plugins.scenes.boxes import Boxes, BoxSpec

@@ -9,7 +9,7 @@ import pytest
 import torch
 
 from retarget import PluginError
-from retarget.heading import yaw_quat
+from retarget.geometry.heading import yaw_quat
 from retarget.plugins.rewards.action import ActionDiff, ActionMin
 from retarget.plugins.rewards.contact import FootContact
 from retarget.plugins.rewards.fail import FailPenalty

@@ -10,12 +10,12 @@ import torch
 
 from retarget import PluginError
 from retarget.env import EnvOptions, RetargetEnv
+from retarget.kinds.state import SCENE_CONTACTS
 from retarget.motion.procedural import default_motions
 from retarget.plugins.characters.human import Human
 from retarget.plugins.rewards.scene_contact import LINKS, SceneContact
-from retarget.state import SCENE_CONTACTS
+from retarget.sim.world import build_world
 from retarget.testing import fake_context, parametrize_with_checks
-from retarget.world import build_world
 
 HUMAN = build_world(Human()).layout
 

@@ -103,8 +103,8 @@ def test_recipe_with_motion_props_and_the_contact_reward(tmp_path) -> None:
     """A recipe names the scene and the reward; the sitting clip gets its fitted seat, and a
     step's contact reward is computed against its labels."""
     from retarget.env.build import env_from_recipe
-    from retarget.loader import load_plugins
     from retarget.recipe import load
+    from retarget.registry.loader import load_plugins
 
     recipe = tmp_path / "sit.yaml"
     recipe.write_text(

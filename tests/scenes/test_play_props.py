@@ -8,10 +8,10 @@ import torch
 
 from retarget.env import EnvOptions, RetargetEnv
 from retarget.motion.procedural import default_motions
-from retarget.play import copy_env_pose, render_rollout
 from retarget.plugins.characters.human import Human
 from retarget.plugins.scenes.flat import Flat
 from retarget.plugins.scenes.path_boxes import PathBoxes
+from retarget.render.policy_video import copy_env_pose, render_rollout
 
 (WALK,) = default_motions(names=("walk",))
 

@@ -8,9 +8,9 @@ import torch
 from retarget.env import RetargetEnv
 from retarget.env.build import env_from_recipe
 from retarget.env.observations import proprio_size
-from retarget.loader import load_plugins
 from retarget.motion.procedural import default_motions
 from retarget.recipe import load
+from retarget.registry.loader import load_plugins
 
 REGISTRY = load_plugins(strict=True)
 CLIPS = default_motions()[:2]

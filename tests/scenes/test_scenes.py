@@ -10,7 +10,6 @@ import pytest
 import torch
 
 from retarget.errors import PluginError
-from retarget.loader import load_plugins
 from retarget.plugins.characters.human import Human
 from retarget.plugins.scenes.bench import Bench
 from retarget.plugins.scenes.boxes import Boxes, BoxSpec
@@ -22,8 +21,9 @@ from retarget.plugins.scenes.mesh import MeshScene
 from retarget.plugins.scenes.rotating_chair import RotatingChair
 from retarget.plugins.scenes.stool import Stool
 from retarget.plugins.scenes.tilting_chair import TiltingChair
+from retarget.registry.loader import load_plugins
+from retarget.sim.world import build_world
 from retarget.testing import parametrize_with_checks
-from retarget.world import build_world
 
 SCENES = [
     Flat,

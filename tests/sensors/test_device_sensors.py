@@ -9,7 +9,7 @@ import pytest
 import torch
 
 from retarget import PluginError
-from retarget.heading import quat_apply, quat_mul, quat_to_6d, yaw_quat
+from retarget.geometry.heading import quat_apply, quat_mul, quat_to_6d, yaw_quat
 from retarget.plugins.sensors.devices import Hmd, ThreePoint
 from retarget.testing import fake_context, tiny_world
 

@@ -11,10 +11,10 @@ import torch
 from helpers import TINY
 
 from retarget.env.build import env_from_recipe
-from retarget.heading import quat_mul, yaw_quat
-from retarget.loader import load_plugins
+from retarget.geometry.heading import quat_mul, yaw_quat
 from retarget.plugins.sensors.full_body import FullBody
 from retarget.recipe import load, parse_text, resolve
+from retarget.registry.loader import load_plugins
 from retarget.testing import fake_context, tiny_world
 
 LAYOUT = tiny_world().layout

@@ -6,7 +6,7 @@ import math
 
 import torch
 
-from retarget.heading import (
+from retarget.geometry.heading import (
     heading_cos_sin,
     heading_quat,
     quat_angle,

@@ -8,7 +8,7 @@ import pytest
 
 from retarget.plugins.characters.human import Human
 from retarget.sim import apply_actuation
-from retarget.world import build_world
+from retarget.sim.world import build_world
 
 
 def _human_model() -> mujoco.MjModel:

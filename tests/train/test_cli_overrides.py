@@ -11,10 +11,10 @@ from helpers import TINY
 
 from retarget.cli.main import main
 from retarget.env.build import motion_formats
-from retarget.loader import load_plugins
 from retarget.motion.sources import load_motions
 from retarget.plugins.formats.bvh import Bvh
 from retarget.recipe import parse_text, resolve
+from retarget.registry.loader import load_plugins
 
 
 def test_num_envs_and_threads_flags_are_locked_and_the_run_resumes(

@@ -17,10 +17,10 @@ import pytest
 import torch
 from helpers import TINY, assert_state_equal
 
-from retarget.checkpoint import load_checkpoint
 from retarget.cli.main import main
-from retarget.loader import load_plugins
 from retarget.recipe import load
+from retarget.registry.loader import load_plugins
+from retarget.train.checkpoint import load_checkpoint
 from retarget.train.run_dir import latest_checkpoint, new_run_dir
 from retarget.train.runner import Budget, Trainer
 

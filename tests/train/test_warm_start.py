@@ -12,8 +12,8 @@ from torch import nn
 
 from retarget.cli.main import main
 from retarget.learn.widen import widen_module, widen_normalizer
-from retarget.loader import load_plugins
 from retarget.recipe import load
+from retarget.registry.loader import load_plugins
 from retarget.train.load import load_run
 from retarget.train.run_dir import new_run_dir
 from retarget.train.runner import Budget, Trainer

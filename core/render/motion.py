@@ -4,12 +4,11 @@ Used by ``retarget motion show`` to eyeball what a reader produced (upright? fac
 feet on the floor? left and right the right way round?). Bones are drawn as capsules added to
 the scene per frame, so no model has to be compiled per clip; left limbs are blue, right
 limbs red, the spine grey, and a foot in contact gets a green ball under its ankle.
-On a machine without a display set ``MUJOCO_GL=osmesa`` (CPU) or ``egl`` (GPU).
+Without a display it renders through OSMesa (CPU), or EGL when ``MUJOCO_GL=egl``.
 """
 
 from __future__ import annotations
 
-import os
 import struct
 import zlib
 from pathlib import Path
@@ -19,8 +18,7 @@ import numpy as np
 from retarget.motion import skeleton as sk
 from retarget.motion.clip import MotionClip
 from retarget.motion.devices import device_poses
-
-os.environ.setdefault("MUJOCO_GL", "osmesa")
+from retarget.render.gl import ensure_offscreen
 
 _SCENE = """
 <mujoco>
@@ -97,8 +95,6 @@ def render_frames(
     """
     import mujoco
 
-    from retarget.character_view import ensure_offscreen
-
     ensure_offscreen()
     model = mujoco.MjModel.from_xml_string(_SCENE.format(w=width, h=height))
     data = mujoco.MjData(model)
@@ -108,7 +104,7 @@ def render_frames(
         travel = pos[-1, 0, :2] - pos[0, 0, :2]
         if np.linalg.norm(travel) < 0.3:
             fwd = np.array([1.0, 0.0, 0.0])
-            from retarget.motion import rotations as rot
+            from retarget.geometry import rotations as rot
 
             fwd = rot.apply(clip.global_rot[0, 0], fwd)
             travel = fwd[:2]

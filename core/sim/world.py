@@ -13,8 +13,9 @@ import numpy as np
 
 from retarget.errors import PluginError
 from retarget.kinds import REQUIRED_GROUPS, REQUIRED_SITES, Character, Scene
+from retarget.kinds.state import Layout
+from retarget.scene.floor import add_floor
 from retarget.sim.batched import add_contact_force_sensor
-from retarget.state import Layout
 
 
 @dataclass(frozen=True)
@@ -24,18 +25,6 @@ class World:
     model: mujoco.MjModel
     layout: Layout
     spec: mujoco.MjSpec
-
-
-def add_floor(spec: mujoco.MjSpec, size: float = 50.0) -> None:
-    """A plane at z = 0 that collides with everything (contype/conaffinity 1)."""
-    spec.worldbody.add_geom(
-        name="floor",
-        type=mujoco.mjtGeom.mjGEOM_PLANE,
-        size=[size, size, 0.1],
-        contype=1,
-        conaffinity=1,
-        rgba=[0.8, 0.8, 0.8, 1.0],
-    )
 
 
 def _fail(character: Character, message: str) -> PluginError:

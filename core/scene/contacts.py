@@ -22,7 +22,7 @@ import copy
 import mujoco
 import numpy as np
 
-from retarget.state import Layout
+from retarget.kinds.state import Layout
 
 DEFAULT_MARGIN = 0.03
 """Metres within which a reference geom counts as touching the scene."""

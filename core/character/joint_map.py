@@ -5,7 +5,7 @@ human and the creature are paired by hand, and everything unpaired (tails, ears)
 default. A :class:`JointMap` is that pairing as data, so a recipe can change it (bend Dino's spine
 more, damp Oppy's arm swing) without touching code:
 
-* keys are **character joints** (a hinge group built by :mod:`retarget.body_builder`, e.g.
+* keys are **character joints** (a hinge group built by :mod:`retarget.character.builder`, e.g.
   ``l_hip`` with hinges ``l_hip_y, l_hip_z, l_hip_x``);
 * ``human`` lists one or more canonical joints whose local rotations (relative to the T-pose) are
   composed parent-first, e.g. ``[left_collar, left_shoulder]`` for a character without collars;
@@ -32,7 +32,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from retarget.errors import RecipeError
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 
 _AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
 
@@ -195,7 +195,7 @@ class JointMap(BaseModel):
         link = self.links[cname]
         axes = link.axes if link.axes is not None else tuple(hinge_axes)
         signs = np.array([-1.0 if a.startswith("-") else 1.0 for a in axes])
-        mat = quat_to_matrix(local_rot)
+        mat = rot.to_matrix(rot.normalize(local_rot))
         if link.bend is not None:
             # A hinge like the elbow: how far the bone bends, whatever axis the source put the
             # bend about (sources disagree on where upper-arm twist lives; the bend does not).
@@ -209,11 +209,6 @@ class JointMap(BaseModel):
         if link.offset is not None:
             out = out + np.deg2rad(np.asarray(link.offset))
         return out
-
-
-def quat_to_matrix(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices ``(..., 3, 3)`` of wxyz quaternions ``(..., 4)``."""
-    return rot.to_matrix(rot.normalize(q))
 
 
 def euler_intrinsic(mat: np.ndarray, axes: Sequence[str]) -> np.ndarray:

@@ -9,10 +9,10 @@ import mujoco
 import numpy as np
 import torch
 
-from retarget.character_view import FrameRenderer
 from retarget.env import RetargetEnv
 from retarget.motion import skeleton as sk
-from retarget.motion.render import add_decor_geom
+from retarget.render.character_view import FrameRenderer
+from retarget.render.motion import add_decor_geom
 
 GHOST = (0.2, 0.45, 0.95, 0.55)
 DEVICE = (1.0, 0.85, 0.1, 1.0)

@@ -1,23 +1,21 @@
 """Offscreen pictures of characters: a rest pose, and a human beside a retargeted character.
 
-Rendering uses MuJoCo's own renderer (``MUJOCO_GL=osmesa`` on a machine without a display; set
-before ``mujoco`` is first imported). Labels are drawn with Pillow when it is installed and
+Rendering uses MuJoCo's own renderer (OSMesa on a machine without a display, chosen by
+:func:`retarget.render.gl.ensure_offscreen`). Labels are drawn with Pillow when it is installed and
 skipped otherwise, so no plotting library is needed; Pillow also writes GIFs. MP4 needs
 ``imageio`` with ffmpeg; without it the error says to use ``.gif``.
 """
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from pathlib import Path
-
-os.environ.setdefault("MUJOCO_GL", "osmesa")
 
 import mujoco
 import numpy as np
 
 from retarget.errors import RetargetError
+from retarget.render.gl import ensure_offscreen
 
 FLOOR_RGBA = (0.82, 0.84, 0.86, 1.0)
 
@@ -76,31 +74,6 @@ def fit_camera(
     cam.azimuth = azimuth
     cam.elevation = elevation
     return cam
-
-
-def ensure_offscreen() -> None:
-    """Switch MuJoCo's renderer to OSMesa when there is no display and GLFW was picked.
-
-    MuJoCo reads ``MUJOCO_GL`` once, when ``mujoco`` is first imported; in a process where
-    something imported it before this module (a test session, a plugin), the GLFW backend it
-    picked aborts without a display. The renderer looks its context class up at construction,
-    so pointing it at OSMesa here is enough.
-    """
-    if os.environ.get("DISPLAY") or os.environ.get("MUJOCO_GL", "").lower() == "egl":
-        return
-    from mujoco.rendering.classic import gl_context
-
-    current = getattr(gl_context, "GLContext", None)
-    if current is None or "osmesa" in getattr(current, "__module__", ""):
-        return
-    try:
-        from mujoco.osmesa import GLContext
-    except ImportError as exc:  # pragma: no cover - depends on system libraries
-        raise RetargetError(
-            "offscreen rendering needs OSMesa (apt-get install libosmesa6) "
-            "or MUJOCO_GL=egl with a GPU"
-        ) from exc
-    gl_context.GLContext = GLContext
 
 
 def render(
@@ -186,7 +159,7 @@ def save_video(frames: Sequence[np.ndarray], path: Path, fps: float) -> None:
     ``SHEET_FRAMES`` evenly spaced frames (what a rollout did, at a glance)."""
     suffix = path.suffix.lower()
     if suffix == ".png":
-        from retarget.motion.render import contact_sheet
+        from retarget.render.motion import contact_sheet
 
         picks = np.linspace(0, len(frames) - 1, min(SHEET_FRAMES, len(frames))).round()
         chosen = np.stack([frames[int(i)] for i in picks])

@@ -19,9 +19,9 @@ from types import ModuleType
 
 import pluggy
 
-from retarget import hookspecs
 from retarget.errors import PluginError
-from retarget.registry import Entry, Registry
+from retarget.registry import hookspecs
+from retarget.registry.store import Entry, Registry
 
 GROUP = "retarget"
 OWN_DISTRIBUTION = "retarget"

@@ -35,8 +35,9 @@ import torch
 from pydantic import Field
 
 from retarget.errors import PluginError
+from retarget.geometry.heading import yaw_quat
 from retarget.kinds import PluginConfig, Scene
-from retarget.world import add_floor
+from retarget.scene.floor import add_floor
 
 _BOX = mujoco.mjtGeom.mjGEOM_BOX
 _CYL = mujoco.mjtGeom.mjGEOM_CYLINDER
@@ -162,13 +163,6 @@ class _Tables:
             self.reach[prop] = max(float(self.reach[prop]), far)
 
 
-def yaw_quat64(yaw: torch.Tensor) -> torch.Tensor:
-    """``wxyz`` quaternions of rotations by ``yaw`` about +Z (float64 for MuJoCo's state)."""
-    half = 0.5 * yaw.double()
-    zero = torch.zeros_like(half)
-    return torch.stack([torch.cos(half), zero, zero, torch.sin(half)], dim=-1)
-
-
 class PropScene(Scene):
     """Base of scenes made of :class:`Prop` s; subclasses say which props in :meth:`props`."""
 
@@ -213,7 +207,7 @@ class PropScene(Scene):
                 name=self.body_name(prop),
                 mocap=True,
                 pos=[prop.xy[0], prop.xy[1], 0.0],
-                quat=yaw_quat64(torch.tensor(prop.yaw)).tolist(),
+                quat=yaw_quat(torch.tensor(prop.yaw, dtype=torch.float64)).tolist(),
             )
             for k, part in enumerate(prop.parts):
                 _add_part(body, part, (0.0, 0.0, 0.0), density, f"{self.body_name(prop)}_{k}")
@@ -304,7 +298,7 @@ class PropScene(Scene):
 
     def mocap_poses(self, env_ids: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         pose = self.placement()[env_ids] if self._allocated else self.placement(len(env_ids))
-        return pose[..., :3].contiguous(), yaw_quat64(pose[..., 3])
+        return pose[..., :3].contiguous(), yaw_quat(pose[..., 3].double())
 
     def state_dict(self) -> dict[str, torch.Tensor]:
         return {"offsets": self._offsets.clone()}

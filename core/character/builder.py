@@ -10,9 +10,9 @@ conventions the rest of retarget relies on:
 * **Joints are groups of hinges.** A 3-DoF joint (hip, shoulder, spine) is three hinges in one
   body named ``<joint>_x``, ``<joint>_y``, ``<joint>_z`` (in the order given); a 1-DoF joint is a
   single hinge named ``<joint>``. Hinges composed in one body rotate intrinsically
-  (``R = R1(q1) R2(q2) R3(q3)``), which is what :mod:`retarget.joint_map` decomposes into. Hinges
-  rather than MuJoCo ball joints keep every DoF an angle with its own limit, torque limit and
-  reward weight, which is how the paper counts DoF (Jesse: 16 links, 32 DoF).
+  (``R = R1(q1) R2(q2) R3(q3)``), which is what :mod:`retarget.character.joint_map` decomposes
+  into. Hinges rather than MuJoCo ball joints keep every DoF an angle with its own limit, torque
+  limit and reward weight, which is how the paper counts DoF (Jesse: 16 links, 32 DoF).
 * **Zero pose is the canonical T-pose frame.** Every body frame is world-aligned at ``qpos0``
   (bodies only translate relative to their parent), so a human local rotation relative to the
   canonical T-pose maps onto a character joint without a per-joint frame change.

@@ -2,8 +2,8 @@
 
 This is the paper's "rough kinematic retargeting" (Sec. 3.4, Fig. 4): the root trajectory is
 scaled by the size ratio, mapped joints copy the human's joint angles (through the character's
-:class:`~retarget.joint_map.JointMap`), and unmapped joints (tails, ears) stay at their default.
-The result is the reference the simulated character imitates; its foot sliding, penetration
+:class:`~retarget.character.joint_map.JointMap`), and unmapped joints (tails, ears) stay at their
+default. The result is the reference the simulated character imitates; its foot sliding, penetration
 and floating are the artefacts physics removes, measured here as a baseline.
 
 Everything is computed for a whole clip at once: rotations and Euler decompositions are numpy
@@ -19,9 +19,9 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from retarget.character.joint_map import JointMap
 from retarget.errors import RecipeError
-from retarget.joint_map import JointMap
-from retarget.motion import rotations as rot
+from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 from retarget.motion.clip import MotionClip
 
@@ -40,7 +40,7 @@ class HingeGroup:
 
 
 def hinge_groups(model: mujoco.MjModel) -> dict[str, HingeGroup]:
-    """Character joints of a model built with :mod:`retarget.body_builder` conventions.
+    """Character joints of a model built with :mod:`retarget.character.builder` conventions.
 
     Hinges of one body form a joint; a lone hinge keeps its name, a group of ``<j>_x``-style
     hinges is named ``<j>``. Works on any model following the convention, not only built-ins.

@@ -3,7 +3,7 @@
 Quaternions are ``wxyz`` unit quaternions, Z is up, and every function works on whole batches
 (any leading shape, broadcasting) so sensors and rewards never loop over environments. Rotations
 act on column vectors and compose like matrices: ``quat_mul(a, b)`` applies ``b`` first. The
-conventions match :mod:`retarget.motion.rotations` (the numpy twin used on motion data).
+conventions match :mod:`retarget.geometry.rotations` (the numpy twin used on motion data).
 
 The *heading frame* of a character is the world frame turned about Z by the character's yaw
 and moved horizontally to the character's root. Observations expressed in it do not change when
