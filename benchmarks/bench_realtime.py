@@ -74,10 +74,10 @@ def main() -> None:
         algorithm = resolved.component("algorithm").instantiate()
         algorithm.setup(env, torch.Generator().manual_seed(0))
     group, policy = algorithm.policy()
-    substeps = env.options.sim.substeps
+    substeps = env.sim.settings.substeps
     print(
         f"{env.character.name}, obs {env.obs_dims[group]}, actions {env.action_dim}, "
-        f"{substeps} substeps at {env.options.sim.control_hz:.0f} Hz, torch {torch.__version__}"
+        f"{substeps} substeps at {env.sim.settings.control_hz:.0f} Hz, torch {torch.__version__}"
     )
 
     # physics floor: one MjData of the same model
@@ -134,7 +134,7 @@ def main() -> None:
     obs_ms = (env.seconds["observations"] - before["observations"]) / calls * 1e3
 
     deploy_ms = physics_ms + (onnx_ms if onnx_ms is not None else torch_ms) + obs_ms
-    frame_budget = 1e3 / env.options.sim.control_hz
+    frame_budget = 1e3 / env.sim.settings.control_hz
     print(f"{'physics (mj_step x substeps)':<34} {physics_ms:7.3f} ms")
     print(f"{'policy (torch, batch 1)':<34} {torch_ms:7.3f} ms")
     if onnx_ms is not None:

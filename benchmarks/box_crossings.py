@@ -38,7 +38,7 @@ def crossings(args: argparse.Namespace) -> list[dict]:
                       assignments=args.assignments)  # fmt: skip
     env, lib = loaded.env, loaded.env.library
     model = env.world.model
-    hz = env.options.sim.control_hz
+    hz = env.sim.settings.control_hz
     steps = int(min(args.seconds * hz, int(lib.length[args.clip]) - 2))
     data = mujoco.MjData(model)
     feet, props = foot_geoms(model, env.layout), prop_geoms(model)

@@ -26,7 +26,7 @@ from retarget.train.load import load_run
 def follow(run: str, motions: str | None, clip: int, seconds: float) -> None:
     loaded = load_run(run, load_plugins(strict=False), num_envs=1, motions=motions)
     env, lib = loaded.env, loaded.env.library
-    hz = env.options.sim.control_hz
+    hz = env.sim.settings.control_hz
     steps = int(min(seconds * hz, int(lib.length[clip]) - 2))
     data = mujoco.MjData(env.world.model)
     obs = env.place(torch.full((1,), clip), torch.full((1,), 0))

@@ -39,9 +39,10 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-import mujoco
-import numpy as np
+if TYPE_CHECKING:
+    import mujoco
 
 Vec3 = tuple[float, float, float]
 
@@ -341,6 +342,7 @@ class BodyBuilder:
         lift: float,
         passive_gains: Mapping[str, tuple[float, float, float, float]] | None,
     ) -> tuple[mujoco.MjSpec, dict[str, JointInfo]]:
+        import mujoco
         spec = mujoco.MjSpec()
         spec.modelname = self.name
         spec.compiler.degree = False
@@ -378,6 +380,7 @@ class BodyBuilder:
 def _add_geom(
     body: mujoco.MjsBody, name: str, g: Geom, density: float, rgba: Sequence[float]
 ) -> None:
+    import mujoco
     kw: dict[str, object] = dict(
         name=name,
         density=density,
@@ -418,6 +421,7 @@ def _add_joint(
     damping_per_nm: float,
     armature_per_nm: float,
 ) -> JointInfo:
+    import mujoco
     names = j.hinge_names()
     for hname, dof in zip(names, j.dofs, strict=True):
         jh = body.add_joint(
@@ -464,6 +468,8 @@ def _passive_gains(
     whatever the character's scale. Returns hinge -> (stiffness, damping, springref, armature),
     the armature being ``armature`` times the inertia and included in ``I``.
     """
+    import mujoco
+    import numpy as np
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     unit = np.zeros(model.nv)
@@ -488,6 +494,7 @@ def _passive_gains(
 
 def _rest_extent(model: mujoco.MjModel) -> tuple[float, float]:
     """Lowest and highest world z of any geom at ``qpos0`` (from the geoms' bounding boxes)."""
+    import mujoco
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
     return geom_z_extent(model, data)
@@ -509,6 +516,8 @@ def geom_z_extent(
 
 def _geom_z(model: mujoco.MjModel, data: mujoco.MjData, g: int) -> tuple[float, float]:
     """Exact z extent of capsules, spheres, ellipsoids and boxes in the current pose."""
+    import mujoco
+    import numpy as np
     t = model.geom_type[g]
     size = model.geom_size[g]
     center = data.geom_xpos[g]

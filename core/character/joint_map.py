@@ -26,13 +26,14 @@ hinges of one body.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from retarget.errors import RecipeError
-from retarget.geometry import rotations as rot
+
+if TYPE_CHECKING:
+    import numpy as np
 
 _AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
 
@@ -192,6 +193,9 @@ class JointMap(BaseModel):
 
         ``local_rot`` is ``(T, 4)`` wxyz: the composition of the link's human joints.
         """
+        import numpy as np
+
+        from retarget.geometry import rotations as rot
         link = self.links[cname]
         axes = link.axes if link.axes is not None else tuple(hinge_axes)
         signs = np.array([-1.0 if a.startswith("-") else 1.0 for a in axes])
@@ -217,6 +221,7 @@ def euler_intrinsic(mat: np.ndarray, axes: Sequence[str]) -> np.ndarray:
     ``axes`` (1-3 distinct of x/y/z) is completed with the missing axes in x, y, z order; with
     ``R = R_i(a) R_j(b) R_k(c)`` the angles are recovered in closed form. Batched, no loops.
     """
+    import numpy as np
     order = [_AXIS_INDEX[a] for a in axes]
     order += [i for i in range(3) if i not in order]
     i, j, k = order

@@ -15,8 +15,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import mujoco
 import numpy as np
 
 from retarget.character.joint_map import JointMap
@@ -24,6 +24,9 @@ from retarget.errors import RecipeError
 from retarget.geometry import rotations as rot
 from retarget.motion import skeleton as sk
 from retarget.motion.clip import MotionClip
+
+if TYPE_CHECKING:
+    import mujoco
 
 CLIP_MARGIN = 1e-6
 """Retargeted angles are clipped this far (radians) inside the joint limits."""
@@ -45,6 +48,7 @@ def hinge_groups(model: mujoco.MjModel) -> dict[str, HingeGroup]:
     Hinges of one body form a joint; a lone hinge keeps its name, a group of ``<j>_x``-style
     hinges is named ``<j>``. Works on any model following the convention, not only built-ins.
     """
+    import mujoco
     by_body: dict[int, list[int]] = {}
     for j in range(model.njnt):
         if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE:
@@ -95,6 +99,7 @@ def retarget_clip(
     clip: MotionClip, model: mujoco.MjModel, joint_map: JointMap, *, root_scale: float | None = None
 ) -> KinematicMotion:
     """Kinematically retarget ``clip`` onto the character ``model`` (all frames at once)."""
+    import mujoco
     groups = hinge_groups(model)
     joint_map.validate_against(sk.JOINT_NAMES, {g.name: g.axes for g in groups.values()})
     t = clip.num_frames
@@ -128,6 +133,7 @@ def retarget_clip(
 
 
 def _body_ids(model: mujoco.MjModel, names: Sequence[str]) -> list[int]:
+    import mujoco
     return [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names]
 
 
@@ -135,6 +141,7 @@ def _lowest_points(
     model: mujoco.MjModel, xpos: np.ndarray, xmat: np.ndarray, geoms: Sequence[int]
 ) -> np.ndarray:
     """Lowest world z over ``geoms`` per frame, from per-frame geom poses ``(T, G, ...)``."""
+    import mujoco
     size = model.geom_size[list(geoms)]  # (G, 3)
     types = model.geom_type[list(geoms)]
     zrow = xmat[:, :, 6:9]  # third row of each geom's rotation: world z of its local axes
@@ -177,6 +184,7 @@ def foot_artefacts(
 
     ``feet`` maps ``left_foot``/``right_foot`` to body names (a character's body groups).
     """
+    import mujoco
     data = mujoco.MjData(model)
     sides = [_body_ids(model, feet["left_foot"]), _body_ids(model, feet["right_foot"])]
     geoms = [[g for g in range(model.ngeom) if model.geom_bodyid[g] in ids] for ids in sides]

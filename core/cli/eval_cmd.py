@@ -5,16 +5,14 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from rich.progress import Progress
-from rich.table import Table
-
-from retarget.cli.console import out
 from retarget.cli.numbers import amount, count
 from retarget.cli.run_changes import add_run_change_args
-from retarget.eval import EvalSettings, evaluate
 from retarget.registry import Registry
-from retarget.train.load import load_run
+
+if TYPE_CHECKING:
+    from rich.table import Table
 
 COLUMNS = (
     ("headset_cm", "HMD cm", "{:.1f}"),
@@ -59,6 +57,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def table(report: dict) -> Table:
+    from rich.table import Table
     t = Table(title="tracking evaluation")
     t.add_column("clip")
     for _, label, _ in COLUMNS:
@@ -71,6 +70,11 @@ def table(report: dict) -> Table:
 
 
 def run(args: argparse.Namespace, registry: Registry) -> int:
+    from rich.progress import Progress
+
+    from retarget.cli.console import out
+    from retarget.eval import EvalSettings, evaluate
+    from retarget.train.load import load_run
     loaded = load_run(
         args.run,
         registry,

@@ -5,12 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from retarget.cli.console import out
-from retarget.deploy import export_onnx, policy_of
 from retarget.errors import RetargetError
 from retarget.registry import Registry
-from retarget.sim import describe_actuation
-from retarget.train.load import load_run
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -23,6 +19,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace, registry: Registry) -> int:
+    from retarget.cli.console import out
+    from retarget.deploy import export_onnx, policy_of
+    from retarget.sim import describe_actuation
+    from retarget.train.load import load_run
     if not args.onnx:
         raise RetargetError("choose a format", hint="retarget export RUN --onnx")
     loaded = load_run(args.run, registry, num_envs=1, checkpoint=args.checkpoint)
@@ -33,14 +33,14 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         "run": str(loaded.run),
         "checkpoint": str(loaded.checkpoint),
         "character": env.character.name,
-        "control_hz": env.options.sim.control_hz,
+        "control_hz": env.sim.settings.control_hz,
         "obs_dim": env.obs_dims[group],
         "observation_sources": [
             {"name": name, "size": env.observation_size(name)} for name in env.groups[group]
         ],
         "actuators": list(layout.actuator_names),
         "torque_limits": [float(t) for t in layout.torque_limits],
-        "actuation": describe_actuation(env.sim.model, env.options.sim.actuation),
+        "actuation": describe_actuation(env.sim.model, env.sim.settings.actuation),
     }
     path = Path(args.out) if args.out else loaded.run / "export" / "policy.onnx"
     exported = export_onnx(loaded.algorithm, path, metadata)

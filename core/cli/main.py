@@ -16,7 +16,6 @@ from collections.abc import Sequence
 
 import retarget
 from retarget.cli import eval_cmd, export_cmd, play_cmd, plugins_cmd, recipe_cmd, train_cmd
-from retarget.cli.console import error, warning
 from retarget.errors import RetargetError
 from retarget.kinds import Command
 from retarget.registry import Registry
@@ -88,6 +87,7 @@ def _add_plugin_command(sub: argparse._SubParsersAction, cls: type[Command], plu
 
 
 def _load(strict: bool) -> Registry:
+    from retarget.cli.console import warning
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PluginLoadWarning)
         registry = load_plugins(strict=strict)
@@ -100,6 +100,7 @@ def _load(strict: bool) -> Registry:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from retarget.cli.console import error
     argv = list(sys.argv[1:] if argv is None else argv)
     strict = "--strict-plugins" in argv or strict_from_env()
     try:

@@ -4,22 +4,16 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-import numpy as np
-import torch
-
-from retarget.cli.console import out
 from retarget.cli.numbers import amount, count
 from retarget.cli.run_changes import add_run_change_args
 from retarget.errors import RetargetError
-from retarget.motion.device_recording import DeviceRecording, read_recording
-from retarget.motion.device_stream import align_to, resample_stream
-from retarget.motion.procedural import idle_clip
 from retarget.registry import Registry
-from retarget.render.character_view import label, save_video
-from retarget.render.policy_video import render_rollout
-from retarget.train.load import load_run, locked_recipe
 from retarget.train.run_dir import resolve_run
+
+if TYPE_CHECKING:
+    from retarget.motion.device_recording import DeviceRecording
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -68,6 +62,11 @@ def _changes(args: argparse.Namespace) -> dict:
 def _driven_by(rec: DeviceRecording, path: str, registry: Registry, args: argparse.Namespace):
     """A run whose env's only clip carries the recording's devices (at the control rate,
     calibrated to the character's start) over a standing idle body (start pose only)."""
+    import torch
+
+    from retarget.motion.device_stream import align_to, resample_stream
+    from retarget.motion.procedural import idle_clip
+    from retarget.train.load import load_run, locked_recipe
     changes = _changes(args)
     hz = locked_recipe(resolve_run(path), registry, **changes)[0].recipe.sim.control_hz
     stream = resample_stream(rec, hz)
@@ -84,6 +83,13 @@ def _driven_by(rec: DeviceRecording, path: str, registry: Registry, args: argpar
 
 
 def run(args: argparse.Namespace, registry: Registry) -> int:
+    import numpy as np
+
+    from retarget.cli.console import out
+    from retarget.motion.device_recording import read_recording
+    from retarget.render.character_view import label, save_video
+    from retarget.render.policy_video import render_rollout
+    from retarget.train.load import load_run
     try:
         width, height = (int(v) for v in args.size.lower().split("x"))
     except ValueError:
@@ -100,7 +106,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         env = loaded.env
         if not 0 <= args.clip < env.library.num_clips:
             raise RetargetError(f"--clip {args.clip}: the motions hold {env.library.num_clips}")
-        start = int(args.start * env.options.sim.control_hz)
+        start = int(args.start * env.sim.settings.control_hz)
         frames = render_rollout(
             env,
             loaded.algorithm.act,

@@ -6,10 +6,6 @@ import argparse
 import inspect
 import json
 
-from rich.markup import escape
-from rich.table import Table
-
-from retarget.cli.console import out
 from retarget.registry import Registry
 
 
@@ -25,6 +21,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_list(args: argparse.Namespace, registry: Registry) -> int:
+    from rich.markup import escape
+    from rich.table import Table
+
+    from retarget.cli.console import out
     if args.json:
         rows = [
             {
@@ -52,6 +52,10 @@ def run_list(args: argparse.Namespace, registry: Registry) -> int:
 
 
 def run_show(args: argparse.Namespace, registry: Registry) -> int:
+    from rich.markup import escape
+    from rich.table import Table
+
+    from retarget.cli.console import out
     entry = registry.get(args.kind, args.name)
     cls = entry.cls
     out.print(f"[bold]{entry.kind} {entry.name}[/]  ({cls.__module__}.{cls.__qualname__})")

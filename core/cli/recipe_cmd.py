@@ -5,10 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 
-import yaml
-
-from retarget.cli.console import out
-from retarget.recipe import load, recipe_schema
 from retarget.registry import Registry
 
 
@@ -38,6 +34,7 @@ def shorthands(args: argparse.Namespace) -> dict[str, str | None]:
 
 
 def load_from_args(args: argparse.Namespace, registry: Registry):
+    from retarget.recipe import load
     return load(args.recipe, registry, shorthands=shorthands(args), assignments=args.assignments)
 
 
@@ -56,6 +53,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run_validate(args: argparse.Namespace, registry: Registry) -> int:
+    from retarget.cli.console import out
     resolved = load_from_args(args, registry)
     n = len(resolved.components)
     out.print(f"[green]ok[/]: {resolved.source.path} ({n} components)")
@@ -63,6 +61,9 @@ def run_validate(args: argparse.Namespace, registry: Registry) -> int:
 
 
 def run_show(args: argparse.Namespace, registry: Registry) -> int:
+    import yaml
+
+    from retarget.cli.console import out
     data = load_from_args(args, registry).to_dict()
     if args.format == "json":
         out.print_json(json.dumps(data))
@@ -72,5 +73,6 @@ def run_show(args: argparse.Namespace, registry: Registry) -> int:
 
 
 def run_schema(args: argparse.Namespace, registry: Registry) -> int:
+    from retarget.recipe import recipe_schema
     print(json.dumps(recipe_schema(registry), indent=2))
     return 0

@@ -7,14 +7,10 @@ import json
 from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
 
-from rich.progress import BarColumn, Progress, TaskProgressColumn, TextColumn, TimeRemainingColumn
-
-from retarget.cli.console import out, warning
 from retarget.cli.numbers import amount, count
 from retarget.cli.recipe_cmd import add_recipe_flags, load_from_args
 from retarget.errors import RecipeError
 from retarget.registry import Registry
-from retarget.train.load import locked_recipe, prepared_recipe
 from retarget.train.run_dir import (
     LOCK,
     default_run_name,
@@ -22,8 +18,6 @@ from retarget.train.run_dir import (
     resolve_run,
     starting_run,
 )
-from retarget.train.runner import Budget, Trainer
-from retarget.train.warm_start import INIT_FROM, warm_start
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -74,6 +68,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def _resume_recipe(run: Path, registry: Registry, threads: int | None):
     """The run's locked recipe; ``--threads`` (only the speed changes) is recorded in it."""
+    from retarget.cli.console import warning
+    from retarget.train.load import locked_recipe
     changes = [f"sim.threads={threads}"] if threads is not None else []
     resolved, lock = locked_recipe(run, registry, assignments=changes)
     for path, info in lock.get("plugins", {}).items():
@@ -87,6 +83,18 @@ def _resume_recipe(run: Path, registry: Registry, threads: int | None):
 
 
 def run(args: argparse.Namespace, registry: Registry) -> int:
+    from rich.progress import (
+        BarColumn,
+        Progress,
+        TaskProgressColumn,
+        TextColumn,
+        TimeRemainingColumn,
+    )
+
+    from retarget.cli.console import out
+    from retarget.train.load import prepared_recipe
+    from retarget.train.runner import Budget, Trainer
+    from retarget.train.warm_start import INIT_FROM, warm_start
     if args.steps is None and args.minutes is None:
         out.print("no --steps or --minutes given: training until Ctrl-C (checkpoint on exit)")
     if args.resume and (args.init_from or args.teacher):

@@ -2,6 +2,21 @@
 
 from __future__ import annotations
 
-from retarget.env.env import EnvOptions, RetargetEnv, random_actions
+from typing import TYPE_CHECKING
+
+from retarget.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from retarget.env.env import RetargetEnv, random_actions
+    from retarget.env.options import EnvOptions
+
+__getattr__ = lazy_exports(
+    __name__,
+    {
+        "EnvOptions": "retarget.env.options",
+        "RetargetEnv": "retarget.env.env",
+        "random_actions": "retarget.env.env",
+    },
+)
 
 __all__ = ["EnvOptions", "RetargetEnv", "random_actions"]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from retarget.env.env import EnvOptions, RetargetEnv
+from retarget.env.env import RetargetEnv
 from retarget.kinds import (
     Character,
     MotionFormat,
@@ -16,7 +16,6 @@ from retarget.motion.clip import MotionClip
 from retarget.motion.sources import load_motions
 from retarget.recipe import ResolvedRecipe
 from retarget.registry import Registry
-from retarget.sim import SimSettings
 
 
 def motion_formats(
@@ -73,22 +72,10 @@ def env_from_recipe(
         for path, comp in resolved.components.items()
         if comp.entry.kind == "termination" and terminations
     }
-    sim = SimSettings(
-        control_hz=recipe.sim.control_hz,
-        substeps=recipe.sim.substeps,
-        threads=recipe.sim.threads if threads is None else threads,
-        actuation=recipe.sim.actuation,
-        pd_saturation=recipe.sim.pd_saturation,
-        pd_damping=recipe.sim.pd_damping,
-    )
-    options = EnvOptions(
-        num_envs=recipe.env.num_envs if num_envs is None else num_envs,
-        sim=sim,
-        seed=recipe.seed,
-        privileged_offsets=tuple(recipe.env.privileged_offsets),
-        reset_lift=recipe.env.reset_lift,
-        groups=recipe.env.groups,
-    )
+    sim = recipe.sim if threads is None else recipe.sim.model_copy(update={"threads": threads})
+    options = recipe.env
+    if num_envs is not None:
+        options = options.model_copy(update={"num_envs": num_envs})
     if clips is None:
         clips = load_motions(
             motions if motions is not None else recipe.motions.path,
@@ -108,4 +95,6 @@ def env_from_recipe(
         terminations=ends,
         scene=scene,
         options=options,
+        sim=sim,
+        seed=recipe.seed,
     )

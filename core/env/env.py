@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -37,6 +36,7 @@ from retarget.env.observations import (
     proprio,
     proprio_size,
 )
+from retarget.env.options import EnvOptions
 from retarget.env.reference import CharacterReference
 from retarget.errors import PluginError, RecipeError
 from retarget.kinds import Character, Observer, RewardTerm, Scene, Sensor, Termination
@@ -46,18 +46,6 @@ from retarget.motion.library import MotionLibrary
 from retarget.motion.resample import resample
 from retarget.sim import BatchedSim, SimSettings
 from retarget.sim.world import build_world
-
-
-@dataclass(frozen=True)
-class EnvOptions:
-    """Environment settings that are not plugins."""
-
-    num_envs: int = 64
-    sim: SimSettings = field(default_factory=SimSettings)
-    seed: int = 0
-    privileged_offsets: tuple[int, ...] = (1, 3, 6)
-    reset_lift: float = 0.02  # metres the root is raised at RSI: kinematic feet penetrate a bit
-    groups: Mapping[str, Sequence[str]] | None = None  # None: actor/critic defaults
 
 
 class RetargetEnv:
@@ -74,19 +62,22 @@ class RetargetEnv:
         terminations: Mapping[str, Termination] | None = None,
         scene: Scene | None = None,
         options: EnvOptions | None = None,
+        sim: SimSettings | None = None,
+        seed: int = 0,
     ) -> None:
         self.options = opts = options or EnvOptions()
+        sim = sim or SimSettings()
         self.num_envs = n = opts.num_envs
         self.character, self.scene = character, scene
         if scene is not None:
             scene.fit_motion(clips)  # props placed from the motions come before the build
         self.world = build_world(character, scene)
         self.layout = layout = self.world.layout
-        hz = opts.sim.control_hz
+        hz = sim.control_hz
         clips = [resample(c, hz) for c in clips]
         self.library = MotionLibrary(clips, fps=hz)
         self.reference = CharacterReference(character, self.world.model, layout, clips)
-        self.sim = BatchedSim(self.world.model, layout, n, opts.sim)
+        self.sim = BatchedSim(self.world.model, layout, n, sim)
         self._mocap_ids = self._scene_mocap_ids()
         self.sensors, self.observers = list(sensors), list(observers)
         for plugin in (*self.sensors, *self.observers):
@@ -115,7 +106,7 @@ class RetargetEnv:
             g: sum(self._sources[s][1] for s in names) for g, names in self.groups.items()
         }
         self.action_dim = layout.nu
-        self.generator = torch.Generator().manual_seed(opts.seed)
+        self.generator = torch.Generator().manual_seed(seed)
         self.clip = torch.zeros(n, dtype=torch.long)
         self.frame = torch.zeros(n, dtype=torch.long)
         self.episode_step = torch.zeros(n, dtype=torch.long)
@@ -234,7 +225,7 @@ class RetargetEnv:
             action=action,
             prev_action=self.prev_action,
             episode_step=self.episode_step,
-            dt=self.options.sim.control_dt,
+            dt=self.sim.settings.control_dt,
             scene=self.scene,
         )
 
@@ -258,7 +249,7 @@ class RetargetEnv:
         qpos[:, 2] += self.options.reset_lift
         mocap = None
         if self.scene is not None:  # a new episode gets new prop placements (Sec. 3.4)
-            seconds = frame.double() * self.options.sim.control_dt
+            seconds = frame.double() * self.sim.settings.control_dt
             self.scene.start_episodes(env_ids, clip, seconds)
             self.scene.randomize(env_ids, self.generator)
             if self._mocap_ids.size:

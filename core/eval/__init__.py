@@ -2,6 +2,19 @@
 
 from __future__ import annotations
 
-from retarget.eval.runner import EvalSettings, evaluate
+from typing import TYPE_CHECKING
+
+from retarget.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from retarget.eval.runner import EvalSettings, evaluate
+
+__getattr__ = lazy_exports(
+    __name__,
+    {
+        "EvalSettings": "retarget.eval.runner",
+        "evaluate": "retarget.eval.runner",
+    },
+)
 
 __all__ = ["EvalSettings", "evaluate"]

@@ -73,7 +73,7 @@ def evaluate(
     falls per minute."""
     cfg = settings or EvalSettings()
     probe = MetricProbe(env.layout)
-    dt = env.options.sim.control_dt
+    dt = env.sim.settings.control_dt
     clips, frames = _starts(env, cfg.every)
     runs = len(clips)
     max_steps = round(cfg.max_seconds / dt)

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 from abc import abstractmethod
 from collections.abc import Mapping
-from typing import Any, ClassVar, Protocol, runtime_checkable
-
-import torch
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 
 from retarget.errors import PluginError
 from retarget.kinds.base import Plugin
+
+if TYPE_CHECKING:
+    import torch
 
 
 @runtime_checkable

@@ -5,17 +5,19 @@ from __future__ import annotations
 from abc import abstractmethod
 from typing import TYPE_CHECKING, ClassVar
 
-import torch
 from pydantic import Field
 
 from retarget.kinds.base import Plugin, PluginConfig
 
 if TYPE_CHECKING:
+    import torch
+
     from retarget.kinds.state import Layout, StepContext
 
 
 def gaussian_kernel(distance: torch.Tensor, k: float) -> torch.Tensor:
     """The paper's ``exp(-k * d)`` kernel (the weight ``w`` is applied by the manager)."""
+    import torch
     return torch.exp(-k * distance)
 
 
@@ -50,4 +52,5 @@ class RewardTerm(Plugin):
     def penalty(self, failed: torch.Tensor) -> torch.Tensor:
         """``(N,)`` unweighted value for the environments whose episode just failed (``failed``
         ``(N,)`` bool); used only when :attr:`on_failure` is true. Default: nothing."""
+        import torch
         return torch.zeros(failed.shape[0])

@@ -5,15 +5,14 @@ from __future__ import annotations
 from abc import abstractmethod
 from typing import TYPE_CHECKING, ClassVar
 
-import numpy as np
-import torch
-
 from retarget.kinds.base import Plugin
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
 
     import mujoco
+    import numpy as np
+    import torch
 
     from retarget.motion.clip import MotionClip
 
@@ -91,6 +90,7 @@ class Scene(Plugin):
     def mocap_poses(self, env_ids: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """Positions ``(E, M, 3)`` and ``wxyz`` quaternions ``(E, M, 4)`` of the mocap bodies
         for environments ``env_ids`` (``M = len(mocap_bodies())``)."""
+        import torch
         e = int(env_ids.numel())
         quat = torch.zeros(e, 0, 4, dtype=torch.float64)
         return torch.zeros(e, 0, 3, dtype=torch.float64), quat

@@ -6,20 +6,29 @@ from abc import abstractmethod
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
-import torch
-
 from retarget.kinds.base import Plugin
 
 if TYPE_CHECKING:
+    import torch
+
     from retarget.kinds.state import Layout, StepContext
 
 
 @dataclass(frozen=True)
 class ObsSpec:
-    """Shape (without the leading ``N``) and dtype of one observation."""
+    """Shape (without the leading ``N``) and dtype of one observation.
+
+    The dtype is a torch dtype's name (``"float32"``), so declaring a spec needs no torch.
+    """
 
     shape: tuple[int, ...]
-    dtype: torch.dtype = torch.float32
+    dtype: str = "float32"
+
+    @property
+    def torch_dtype(self) -> torch.dtype:
+        import torch
+
+        return getattr(torch, self.dtype)
 
     @property
     def size(self) -> int:

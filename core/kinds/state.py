@@ -12,9 +12,9 @@ from dataclasses import dataclass, field, fields, replace
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from retarget.kinds.scene import Scene
+    import torch
 
-import torch
+    from retarget.kinds.scene import Scene
 
 
 @dataclass(frozen=True)
@@ -76,6 +76,7 @@ group of ``Layout.body_groups`` in its order (computed once per library frame, n
 
 def _select(obj: object, idx: torch.Tensor) -> object:
     """Rows ``idx`` of every tensor field of a frozen dataclass (other fields kept)."""
+    import torch
     changes: dict[str, object] = {}
     for f in fields(obj):  # type: ignore[arg-type]
         value = getattr(obj, f.name)

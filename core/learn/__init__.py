@@ -6,12 +6,35 @@ third-party algorithm can reuse any part of them.
 
 from __future__ import annotations
 
-from retarget.learn.columns import NamedColumns, source_columns
-from retarget.learn.config import PPOConfig
-from retarget.learn.networks import Critic, GaussianActor, mlp
-from retarget.learn.normalizer import GroupNormalizer, RunningNormalizer
-from retarget.learn.ppo import PPOLearner, torch_threads
-from retarget.learn.storage import RolloutStorage, gae
+from typing import TYPE_CHECKING
+
+from retarget.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from retarget.learn.columns import NamedColumns, source_columns
+    from retarget.learn.config import PPOConfig
+    from retarget.learn.networks import Critic, GaussianActor, mlp
+    from retarget.learn.normalizer import GroupNormalizer, RunningNormalizer
+    from retarget.learn.ppo import PPOLearner, torch_threads
+    from retarget.learn.storage import RolloutStorage, gae
+
+__getattr__ = lazy_exports(
+    __name__,
+    {
+        "NamedColumns": "retarget.learn.columns",
+        "source_columns": "retarget.learn.columns",
+        "PPOConfig": "retarget.learn.config",
+        "Critic": "retarget.learn.networks",
+        "GaussianActor": "retarget.learn.networks",
+        "mlp": "retarget.learn.networks",
+        "GroupNormalizer": "retarget.learn.normalizer",
+        "RunningNormalizer": "retarget.learn.normalizer",
+        "PPOLearner": "retarget.learn.ppo",
+        "torch_threads": "retarget.learn.ppo",
+        "RolloutStorage": "retarget.learn.storage",
+        "gae": "retarget.learn.storage",
+    },
+)
 
 __all__ = [
     "Critic",

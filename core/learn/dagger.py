@@ -17,61 +17,17 @@ import copy
 import math
 import time
 from collections.abc import Mapping
-from typing import Any, Literal
+from typing import Any
 
 import torch
-from pydantic import Field
 from torch import nn
 
-from retarget.kinds import PluginConfig, VecEnv
+from retarget.kinds import VecEnv
+from retarget.learn.config import DaggerConfig
 from retarget.learn.episodes import EpisodeTracker, clone_obs
 from retarget.learn.networks import GaussianActor
 from retarget.learn.normalizer import GroupNormalizer
 from retarget.learn.ppo import DeployedPolicy, torch_threads
-
-
-class DaggerConfig(PluginConfig):
-    """DAgger settings; the student's network matches PPO's actor so that PPO can fine-tune a
-    distilled student with ``--init-from``."""
-
-    teacher: str = Field(
-        description="the teacher's run directory (runs/NAME/latest); its latest checkpoint "
-        "labels the student's states"
-    )
-    teacher_checkpoint: str | None = Field(
-        None,
-        description="checkpoint inside the teacher's run (set when the run starts: its "
-        "latest), so a resumed student keeps the same teacher",
-        pattern=r"^checkpoints/ckpt-[0-9]+\.pt$",
-    )
-    teacher_group: str = Field("teacher", description="observation group the teacher reads")
-    actor_group: str = Field("actor", description="observation group the student reads")
-    rollout_steps: int = Field(32, gt=0, le=10_000, description="steps per env per iteration")
-    learning_rate: float = Field(5e-4, gt=0)
-    epochs: int = Field(4, gt=0, le=1000, description="passes over the buffer per iteration")
-    minibatch_size: int = Field(2048, gt=0, description="samples per gradient step")
-    buffer_rollouts: int = Field(
-        1, ge=1, le=64, description="recent rollouts trained on (1: only the newest)"
-    )
-    loss: Literal["mse", "kl"] = Field(
-        "mse", description="mse on action means, or KL(teacher || student) of the Gaussians"
-    )
-    teacher_std: float = Field(0.141, gt=0, description="kl: the teacher's action std")
-    action_noise: float = Field(
-        0.05, ge=0, description="std of the noise added to the student's actions while "
-        "collecting (visits states around its own trajectory)"
-    )
-    beta: float = Field(0.0, ge=0, le=1, description="start probability the teacher acts")
-    beta_iterations: int = Field(
-        0, ge=0, description="iterations over which beta falls linearly to 0"
-    )
-    max_grad_norm: float = Field(1.0, gt=0)
-    activation: Literal["tanh", "elu", "relu"] = "tanh"
-    actor_hidden: tuple[int, ...] = (300, 200, 100)
-    obs_clip: float = Field(10.0, gt=0)
-    collect_threads: int = Field(1, ge=0, description="torch threads while acting; 0: leave")
-    update_threads: int = Field(2, ge=0, description="torch threads while updating; 0: leave")
-    episode_window: int = Field(100, gt=0, description="finished episodes averaged in stats")
 
 
 class DaggerLearner:

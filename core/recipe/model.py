@@ -12,7 +12,8 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from retarget.sim.actuation import Actuation
+from retarget.env.options import EnvOptions
+from retarget.sim.settings import SimSettings
 
 
 class Strict(BaseModel):
@@ -49,40 +50,6 @@ class MotionsSection(Strict):
     )
 
 
-class SimSection(Strict):
-    """Physics timing: ``substeps`` steps of ``1/(control_hz*substeps)`` s per control step."""
-
-    control_hz: float = Field(36.0, gt=0, description="policy rate (the paper uses 36 Hz)")
-    substeps: int = Field(10, ge=1, description="physics steps per control step")
-    threads: int = Field(0, ge=0, description="physics threads; 0 uses every core")
-    actuation: Actuation = Field(
-        "torque",
-        description="torque: actions scale each joint's torque limit (the paper); pd: actions "
-        "are joint-angle targets of torque-limited PD servos (retarget.sim.actuation)",
-    )
-    pd_saturation: float = Field(
-        0.5, gt=0, description="pd: angle error (rad) at which a servo reaches its torque limit"
-    )
-    pd_damping: float = Field(0.1, ge=0, description="pd: kd = pd_damping * kp (seconds)")
-
-
-class EnvSection(Strict):
-    """The tracking environment's own settings (plugins configure the rest)."""
-
-    num_envs: int = Field(256, ge=1, description="environments stepped together")
-    privileged_offsets: list[int] = Field(
-        default_factory=lambda: [1, 3, 6],
-        description="future reference frames the critic sees (asymmetric critic)",
-    )
-    reset_lift: float = Field(0.02, ge=0, description="root lift at reset, m")
-    groups: dict[str, list[str]] | None = Field(
-        None,
-        description="observation groups: name -> sources (sensor/observer names, 'proprio', "
-        "'privileged'); default actor = sensors + proprio + observers, critic = actor + "
-        "privileged",
-    )
-
-
 class Recipe(Strict):
     """A complete, declarative description of one training or evaluation setup."""
 
@@ -101,8 +68,8 @@ class Recipe(Strict):
     terminations: dict[str, ComponentRef] = Field(default_factory=dict)
     algorithm: ComponentRef | None = None
     motions: MotionsSection = Field(default_factory=MotionsSection)
-    sim: SimSection = Field(default_factory=SimSection)
-    env: EnvSection = Field(default_factory=EnvSection)
+    sim: SimSettings = Field(default_factory=SimSettings)
+    env: EnvOptions = Field(default_factory=EnvOptions)
 
     @field_validator("name")
     @classmethod

@@ -42,11 +42,16 @@ def _allowlist() -> set[str] | None:
     return {part.strip() for part in raw.split(",") if part.strip()}
 
 
-def _dist(ep: EntryPoint) -> tuple[str, str]:
+def _dist(ep: EntryPoint, seen: dict[int, tuple[str, str]]) -> tuple[str, str]:
+    """Name and version of an entry point's distribution, read once per distribution (each
+    read parses its METADATA file, and a distribution has many entry points)."""
     dist = getattr(ep, "dist", None)
     if dist is None:
         return "unknown", "?"
-    return dist.metadata["Name"] or dist.name, dist.version
+    if id(dist) not in seen:
+        meta = dist.metadata
+        seen[id(dist)] = (meta["Name"] or dist.name, meta["Version"] or "?")
+    return seen[id(dist)]
 
 
 def _entry_points() -> list[EntryPoint]:
@@ -82,8 +87,9 @@ def load_plugins(
     candidates: list[tuple[str, str, str, object]] = []
     if use_entry_points:
         allow = _allowlist()
+        dists: dict[int, tuple[str, str]] = {}
         for ep in _entry_points():
-            dist, version = _dist(ep)
+            dist, version = _dist(ep, dists)
             if allow is not None and dist != OWN_DISTRIBUTION and dist not in allow:
                 continue
             try:

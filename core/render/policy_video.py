@@ -53,7 +53,7 @@ def render_rollout(
     model = env.world.model
     data = mujoco.MjData(model)
     lib = env.library
-    steps = int(min(seconds * env.options.sim.control_hz, int(lib.length[clip]) - 1 - start))
+    steps = int(min(seconds * env.sim.settings.control_hz, int(lib.length[clip]) - 1 - start))
     n = env.num_envs
     obs = env.place(torch.full((n,), clip), torch.full((n,), start))
     cam = mujoco.MjvCamera()

@@ -18,11 +18,13 @@ policy should make; the paper keeps its labels fixed under randomization too.
 from __future__ import annotations
 
 import copy
-
-import mujoco
-import numpy as np
+from typing import TYPE_CHECKING
 
 from retarget.kinds.state import Layout
+
+if TYPE_CHECKING:
+    import mujoco
+    import numpy as np
 
 DEFAULT_MARGIN = 0.03
 """Metres within which a reference geom counts as touching the scene."""
@@ -37,6 +39,7 @@ CONTACT_NEWTONS = 50.0
 def group_matrix(model: mujoco.MjModel, layout: Layout) -> np.ndarray:
     """``(nbody, G)`` bool: model body ``b`` belongs to group ``g`` (``layout.body_groups``
     order); rows of bodies that are not the character's are all false."""
+    import numpy as np
     groups = list(layout.body_groups.values())
     member = np.zeros((model.nbody, len(groups)), dtype=bool)
     for g, idx in enumerate(groups):
@@ -53,6 +56,8 @@ def scene_contact_labels(
 ) -> np.ndarray:
     """``(T, G)`` bool labels of full-model poses ``qpos`` ``(T, model.nq)``, one column per
     body group of ``layout`` (see the module doc)."""
+    import mujoco
+    import numpy as np
     m = copy.deepcopy(model)  # margins only for labelling, not in the simulated model
     character = np.zeros(m.nbody, dtype=bool)
     character[list(layout.body_ids)] = True

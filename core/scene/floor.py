@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
-import mujoco
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    import mujoco
 
 
 def add_floor(spec: mujoco.MjSpec, size: float = 50.0) -> None:
     """A plane at z = 0 that collides with everything (contype/conaffinity 1)."""
+    import mujoco
     spec.worldbody.add_geom(
         name="floor",
         type=mujoco.mjtGeom.mjGEOM_PLANE,

@@ -27,20 +27,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import ClassVar, Literal
+from typing import TYPE_CHECKING, ClassVar, Literal
 
-import mujoco
-import numpy as np
-import torch
 from pydantic import Field
 
 from retarget.errors import PluginError
-from retarget.geometry.heading import yaw_quat
 from retarget.kinds import PluginConfig, Scene
 from retarget.scene.floor import add_floor
 
-_BOX = mujoco.mjtGeom.mjGEOM_BOX
-_CYL = mujoco.mjtGeom.mjGEOM_CYLINDER
+if TYPE_CHECKING:
+    import mujoco
+    import numpy as np
+    import torch
+
 _FLOOR_EPS = 1e-6
 
 
@@ -142,6 +141,7 @@ class _Tables:
     def __post_init__(self) -> None:
         """Per-prop copies ``(P, M, ...)`` padded to the most parts of any prop (float32), and
         each prop's ``reach``: the radius of its footprint around its origin."""
+        import torch
         props = len(self.base)
         count = torch.bincount(self.prop_of, minlength=props) if props else torch.zeros(0)
         m = int(count.max()) if props else 0
@@ -169,6 +169,7 @@ class PropScene(Scene):
     Config: ClassVar[type[PluginConfig]] = PropSceneConfig
 
     def __init__(self, config: PluginConfig | None = None) -> None:
+        import torch
         super().__init__(config)
         self._props = self.placed_props()
         names = [p.name for p in self._props]
@@ -200,6 +201,10 @@ class PropScene(Scene):
         return f"scene_{prop.name}"
 
     def build(self, spec: mujoco.MjSpec) -> None:
+        import mujoco
+        import torch
+
+        from retarget.geometry.heading import yaw_quat
         add_floor(spec)
         density = float(getattr(self.config, "density", 500.0))
         for prop in self._props:
@@ -236,6 +241,7 @@ class PropScene(Scene):
     # ---------------------------------------------------------------- placement
 
     def _flatten(self) -> _Tables:
+        import torch
         rows = [(i, part) for i, p in enumerate(self._props) for part in p.all_parts()]
         f64 = torch.float64
         return _Tables(
@@ -249,12 +255,14 @@ class PropScene(Scene):
         )
 
     def allocate(self, num_envs: int) -> None:
+        import torch
         self._offsets = torch.zeros(num_envs, len(self._props), 4, dtype=torch.float64)
         self._allocated = True
 
     def randomize(self, env_ids: torch.Tensor, generator: torch.Generator) -> None:
         """Offsets ``(dx, dy, dz, dyaw)`` per prop for ``env_ids``: a uniform point in a disc
         of radius ``position``, ``dz`` in ``[-height, height]``, ``dyaw`` in ``[-yaw, yaw]``."""
+        import torch
         r = self.randomization
         p = len(self._props)
         if p == 0 or env_ids.numel() == 0:
@@ -284,6 +292,7 @@ class PropScene(Scene):
 
     def placement(self, n: int | None = None) -> torch.Tensor:
         """Per-environment prop poses ``(N, P, 4)``: x, y, z, yaw (float64)."""
+        import torch
         t = self._tables
         base = torch.cat([t.base[:, :2], torch.zeros_like(t.base[:, :1]), t.base[:, 2:]], -1)
         if not self._allocated:
@@ -297,6 +306,7 @@ class PropScene(Scene):
         return base + self._offsets
 
     def mocap_poses(self, env_ids: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        from retarget.geometry.heading import yaw_quat
         pose = self.placement()[env_ids] if self._allocated else self.placement(len(env_ids))
         return pose[..., :3].contiguous(), yaw_quat(pose[..., 3].double())
 
@@ -313,6 +323,7 @@ class PropScene(Scene):
         """Each environment tests only the props whose footprint circle reaches its query
         points' bounding circle (a height map covers one or two of a room's props), each prop's
         parts padded to the most any prop has; float32 keeps micrometres within a room."""
+        import torch
         n = xy.shape[0]
         t = self._tables
         if t.top.numel() == 0:
@@ -342,6 +353,7 @@ class PropScene(Scene):
 
     def local_surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
         """``(count, 4)``: prop index and x, y, z in that prop's frame (area-weighted)."""
+        import numpy as np
         faces = []  # (prop, area, sampler)
         for i, part in self._tables.parts:
             faces.extend((i, area, fn) for area, fn in _faces(part))
@@ -357,15 +369,18 @@ class PropScene(Scene):
         return out
 
     def surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
+        import torch
         local = torch.from_numpy(self.local_surface_points(count, rng))
         return self.place_surface_points(local).numpy()
 
     def place_surface_points(
-        self, local: torch.Tensor, dtype: torch.dtype = torch.float64
+        self, local: torch.Tensor, dtype: torch.dtype | None = None
     ) -> torch.Tensor:
         """Prop-frame samples ``(C, 4)`` (:meth:`local_surface_points`) placed for every
         held environment ``(N, C, 3)``: callers that redraw often sample once and place many
-        times (in ``dtype``; float32 is plenty for observations)."""
+        times (in ``dtype``, float64 when None; float32 is plenty for observations)."""
+        import torch
+        dtype = torch.float64 if dtype is None else dtype
         n = self._offsets.shape[0] if self._allocated else 1
         pose = self.placement(n).to(dtype)
         if local.shape[0] == 0 or pose.shape[1] == 0:
@@ -375,6 +390,7 @@ class PropScene(Scene):
 
 def place_points(local: torch.Tensor, pose: torch.Tensor) -> torch.Tensor:
     """Points ``(C, 4)`` (prop index, local xyz) placed by poses ``(N, P, 4)`` -> ``(N, C, 3)``."""
+    import torch
     p = pose[:, local[:, 0].long()]  # (N, C, 4)
     c, s = torch.cos(p[..., 3]), torch.sin(p[..., 3])
     x, y, z = local[:, 1], local[:, 2], local[:, 3]
@@ -383,6 +399,7 @@ def place_points(local: torch.Tensor, pose: torch.Tensor) -> torch.Tensor:
 
 def _faces(part: Part):
     """(area, sampler) of each exposed face of a part; samplers draw ``(k, 3)`` points."""
+    import numpy as np
     hx, _, hz = part.half
     cx, cy, cz = part.pos
     out = []
@@ -431,11 +448,12 @@ def _add_part(
     name: str,
 ) -> None:
     """A collision geom for ``part`` on ``body`` whose frame sits at ``origin`` (prop frame)."""
+    import mujoco
     pos = [part.pos[i] - origin[i] for i in range(3)]
     size = list(part.half) if part.shape == "box" else [part.half[0], part.half[2], 0.0]
     body.add_geom(
         name=name,
-        type=_BOX if part.shape == "box" else _CYL,
+        type=mujoco.mjtGeom.mjGEOM_BOX if part.shape == "box" else mujoco.mjtGeom.mjGEOM_CYLINDER,
         size=size,
         pos=pos,
         density=density,

@@ -2,7 +2,23 @@
 
 from __future__ import annotations
 
-from retarget.sim.actuation import apply_actuation, describe_actuation
-from retarget.sim.batched import BatchedSim, SimSettings
+from typing import TYPE_CHECKING
+
+from retarget.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from retarget.sim.actuation import apply_actuation, describe_actuation
+    from retarget.sim.batched import BatchedSim
+    from retarget.sim.settings import SimSettings
+
+__getattr__ = lazy_exports(
+    __name__,
+    {
+        "apply_actuation": "retarget.sim.actuation",
+        "describe_actuation": "retarget.sim.actuation",
+        "BatchedSim": "retarget.sim.batched",
+        "SimSettings": "retarget.sim.settings",
+    },
+)
 
 __all__ = ["BatchedSim", "SimSettings", "apply_actuation", "describe_actuation"]

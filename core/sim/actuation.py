@@ -20,13 +20,10 @@ computed from the model's own joint ranges and force limits, so applying it twic
 
 from __future__ import annotations
 
-from typing import Literal, get_args
-
 import mujoco
 import numpy as np
 
-Actuation = Literal["torque", "pd"]
-ACTUATIONS: tuple[str, ...] = get_args(Actuation)
+from retarget.sim.settings import ACTUATIONS, Actuation
 
 
 def apply_actuation(

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TypeVar
 
 import mujoco
@@ -22,37 +21,13 @@ import torch
 from mujoco.batch import Batch
 
 from retarget.kinds.state import Layout, SimState
-from retarget.sim.actuation import Actuation, apply_actuation
+from retarget.sim.actuation import apply_actuation
+from retarget.sim.settings import SimSettings
 
 T = TypeVar("T")
 
 HUGE_VELOCITY = 1e4
 """|qvel| above this (rad/s or m/s) counts as a blown-up simulation, like MuJoCo's own check."""
-
-
-@dataclass(frozen=True)
-class SimSettings:
-    """Timing of one control step: ``substeps`` physics steps of ``1 / (control_hz * substeps)``.
-
-    The default 36 Hz control (the paper's rate) with 10 substeps gives a 2.78 ms physics step:
-    under random torques the built-in human and Jesse needed resets at 1/216 s but none at
-    1/360 s, while Dino and Oppy were stable at both.
-    """
-
-    control_hz: float = 36.0
-    substeps: int = 10
-    threads: int = 0  # 0: all cores
-    actuation: Actuation = "torque"  # or "pd": see retarget.sim.actuation
-    pd_saturation: float = 0.5  # rad of error at which a PD servo reaches its torque limit
-    pd_damping: float = 0.1  # s: kd = pd_damping * kp
-
-    @property
-    def timestep(self) -> float:
-        return 1.0 / (self.control_hz * self.substeps)
-
-    @property
-    def control_dt(self) -> float:
-        return 1.0 / self.control_hz
 
 
 def body_velocities(

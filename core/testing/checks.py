@@ -173,7 +173,7 @@ def _expected(inst: Plugin, kind: str, layout) -> tuple[tuple[int, ...], torch.d
     if kind == "termination":
         return (), torch.bool
     spec = inst.spec(layout)
-    return tuple(spec.shape), spec.dtype
+    return tuple(spec.shape), spec.torch_dtype
 
 
 def check_batched_shapes(plugin: object) -> None:

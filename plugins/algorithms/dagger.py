@@ -14,17 +14,16 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import Any
-
-import torch
+from typing import TYPE_CHECKING, Any
 
 import retarget
 from retarget import Algorithm, PluginError, RecipeError, VecEnv
-from retarget.learn.dagger import DaggerConfig, DaggerLearner
-from retarget.motion.procedural import idle_clip
-from retarget.recipe import parse_text
-from retarget.train.load import load_run
-from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
+from retarget.learn.config import DaggerConfig
+
+if TYPE_CHECKING:
+    import torch
+
+    from retarget.learn.dagger import DaggerLearner
 
 PHYSICS = ("control_hz", "substeps", "actuation", "pd_saturation", "pd_damping")
 """Simulation settings a teacher's actions depend on: they must match the student's."""
@@ -71,6 +70,7 @@ class Dagger(Algorithm):
     @classmethod
     def example(cls) -> Dagger:
         """Distils a fixed linear teacher reading the ``critic`` group: no teacher run."""
+        import torch
 
         def linear(width: int, actions: int) -> torch.nn.Module:
             layer = torch.nn.Linear(width, actions)
@@ -85,6 +85,8 @@ class Dagger(Algorithm):
     # ------------------------------------------------------------------ the recipe
 
     def prepare_recipe(self, recipe: dict[str, Any], registry: Any) -> dict[str, Any]:
+        from retarget.recipe import parse_text
+        from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
         c = self.config
         assert isinstance(c, DaggerConfig)
         run = resolve_run(c.teacher)
@@ -164,6 +166,7 @@ class Dagger(Algorithm):
         self.registry = registry
 
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
+        from retarget.learn.dagger import DaggerLearner
         assert isinstance(self.config, DaggerConfig)
         try:
             self.learner = DaggerLearner(
@@ -183,6 +186,9 @@ class Dagger(Algorithm):
     def _load_teacher(self) -> None:
         """The teacher run's deployable policy, loaded once, when training starts (acting,
         evaluating and exporting a student never need it)."""
+        from retarget.motion.procedural import idle_clip
+        from retarget.train.load import load_run
+        from retarget.train.run_dir import resolve_run
         if self.registry is None:
             raise PluginError(
                 "needs the plugin registry to load its teacher run", plugin=self.name,

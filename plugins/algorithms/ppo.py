@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
-
-import torch
+from typing import TYPE_CHECKING, Any
 
 import retarget
 from retarget import Algorithm, PluginError, VecEnv
-from retarget.learn import PPOConfig, PPOLearner, source_columns
+from retarget.learn.config import PPOConfig
+
+if TYPE_CHECKING:
+    import torch
+
+    from retarget.learn.ppo import PPOLearner
 
 
 class PPO(Algorithm):
@@ -29,6 +32,8 @@ class PPO(Algorithm):
         self.learner: PPOLearner | None = None
 
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
+        from retarget.learn.columns import source_columns
+        from retarget.learn.ppo import PPOLearner
         assert isinstance(self.config, PPOConfig)
         residual = None
         if self.config.residual is not None:

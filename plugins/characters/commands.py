@@ -12,8 +12,6 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 import retarget
 from retarget import Command, RetargetError
 
@@ -121,6 +119,7 @@ def retarget_video(character: Any, clip: Any, out: Path, width: int, height: int
                    seconds: float, start: float, fps: float) -> dict[str, float]:
     """Human (the ``human`` character at the subject's height) beside the retargeted character."""
     import mujoco
+    import numpy as np
 
     from retarget.character import kinematic as km
     from retarget.plugins.characters.human import Human
@@ -169,6 +168,7 @@ def retarget_video(character: Any, clip: Any, out: Path, width: int, height: int
 def _half_width(model: Any) -> float:
     """Half the lateral extent of a model at rest (to space characters side by side)."""
     import mujoco
+    import numpy as np
 
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)

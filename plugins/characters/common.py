@@ -8,15 +8,17 @@ from __future__ import annotations
 
 from abc import abstractmethod
 from collections.abc import Mapping, Sequence
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
-import mujoco
 from pydantic import Field
 
 from retarget import Character, PluginConfig, RecipeError
-from retarget.character.builder import BodyBuilder, BuiltCharacter
 from retarget.character.joint_map import JointMap
-from retarget.motion import skeleton as sk
+
+if TYPE_CHECKING:
+    import mujoco
+
+    from retarget.character.builder import BodyBuilder, BuiltCharacter
 
 
 class CharacterConfig(PluginConfig):
@@ -95,6 +97,7 @@ class ProceduralCharacter(Character):
 
     def joint_map(self) -> JointMap:
         """Default map with the config's overrides, validated against both skeletons."""
+        from retarget.motion import skeleton as sk
         try:
             jmap = self.default_joint_map().with_overrides(self.config.joint_map)
         except RecipeError as exc:

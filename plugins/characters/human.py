@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 from pydantic import Field
 
 import retarget
-from retarget.character.builder import BodyBuilder
 from retarget.character.joint_map import JointMap
 
 from .common import CharacterConfig, ProceduralCharacter
@@ -18,6 +18,9 @@ from .humanoid import (
     humanoid_groups,
     humanoid_joint_map,
 )
+
+if TYPE_CHECKING:
+    from retarget.character.builder import BodyBuilder
 
 
 class HumanConfig(CharacterConfig):

@@ -11,19 +11,14 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
-
-import numpy as np
-import torch
-from mujoco.batch import Batch
-from rich.console import Console
-from rich.progress import Progress
-from rich.table import Table
+from typing import TYPE_CHECKING
 
 import retarget
 from retarget import Command
-from retarget.cli.recipe_cmd import add_recipe_flags, load_from_args
-from retarget.env import random_actions
-from retarget.env.build import env_from_recipe
+
+if TYPE_CHECKING:
+    import numpy as np
+    from mujoco.batch import Batch
 
 
 def _raw_block(batch: Batch, ctrl: np.ndarray, substeps: int, steps: int, rng) -> float:
@@ -42,6 +37,7 @@ class BenchCommand(Command):
     help = "measure throughput on this machine (bench env)"
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
+        from retarget.cli.recipe_cmd import add_recipe_flags
         sub = parser.add_subparsers(dest="bench_verb", required=True)
         env = sub.add_parser("env", help="environment steps/s vs raw MuJoCo steps/s")
         add_recipe_flags(env)
@@ -51,13 +47,23 @@ class BenchCommand(Command):
         env.add_argument("--blocks", type=int, default=4, help="alternating measuring blocks")
 
     def run(self, args: argparse.Namespace) -> int:
+        import numpy as np
+        import torch
+        from mujoco.batch import Batch
+        from rich.console import Console
+        from rich.progress import Progress
+        from rich.table import Table
+
+        from retarget.cli.recipe_cmd import load_from_args
+        from retarget.env import random_actions
+        from retarget.env.build import env_from_recipe
         console = Console()
         # torch's intra-op threads spin between the env's many small tensor ops and steal
         # cores from MuJoCo's pool (measured: physics 40% slower with 2 torch threads)
         torch.set_num_threads(1)
         resolved = load_from_args(args, args.registry)
         env = env_from_recipe(resolved, num_envs=args.num_envs, threads=args.threads)
-        settings = env.options.sim
+        settings = env.sim.settings
         gen = torch.Generator().manual_seed(0)
         env.reset()
         for _ in range(10):  # warm-up

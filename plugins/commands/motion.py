@@ -5,12 +5,13 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-
-import numpy as np
+from typing import TYPE_CHECKING
 
 import retarget
 from retarget import Command, MotionError, RetargetError
-from retarget.motion.clip import MotionClip
+
+if TYPE_CHECKING:
+    from retarget.motion.clip import MotionClip
 
 
 def _formats(args: argparse.Namespace) -> dict:
@@ -134,6 +135,8 @@ class MotionCommand(Command):
         return 0
 
     def _show(self, args: argparse.Namespace) -> int:
+        import numpy as np
+
         from retarget.render.motion import contact_sheet, render_frames, write_png
 
         out = Path(args.out)

@@ -4,18 +4,15 @@ skeleton given a name map) read onto the canonical human skeleton."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
-import numpy as np
 from pydantic import Field
 
 import retarget
 from retarget import MotionFormat, PluginConfig
-from retarget.geometry import rotations as rot
-from retarget.motion import skeleton as sk
-from retarget.motion.bvh_write import write_bvh
-from retarget.motion.clip import MotionClip
-from retarget.motion.import_bvh import load_bvh
+
+if TYPE_CHECKING:
+    from retarget.motion.clip import MotionClip
 
 
 class BvhConfig(PluginConfig):
@@ -43,6 +40,7 @@ class Bvh(MotionFormat):
     suffixes = (".bvh",)
 
     def read(self, path: Path) -> MotionClip:
+        from retarget.motion.import_bvh import load_bvh
         cfg: BvhConfig = self.config  # type: ignore[assignment]
         return load_bvh(path, name_map=cfg.name_map, units=cfg.units, up=cfg.up, fps=cfg.fps,
                         reference_frame=cfg.reference_frame)
@@ -50,6 +48,12 @@ class Bvh(MotionFormat):
     @classmethod
     def write_sample(cls, directory: Path) -> Path:
         """One second of a T-pose easing into a knee bend and an arm raise, at 30 fps."""
+        import numpy as np
+
+        from retarget.geometry import rotations as rot
+        from retarget.motion import skeleton as sk
+        from retarget.motion.bvh_write import write_bvh
+        from retarget.motion.clip import MotionClip
         frames = 30
         t = np.linspace(0.0, 1.0, frames)
         local = rot.identity((frames, sk.NUM_JOINTS))

@@ -15,14 +15,15 @@ casts), reported as chosen by ``relative``:
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
-import torch
 from pydantic import Field
 
 import retarget
 from retarget import Layout, Observer, ObsSpec, PluginConfig, StepContext
-from retarget.geometry.heading import heading_cos_sin
+
+if TYPE_CHECKING:
+    import torch
 
 
 class HeightMapConfig(PluginConfig):
@@ -36,6 +37,7 @@ class HeightMapConfig(PluginConfig):
 
 def circular_grid(radius: float, rings: int, per_ring: int) -> torch.Tensor:
     """Heading-frame offsets ``(rings * per_ring, 2)``: ring ``i`` at ``radius * i / rings``."""
+    import torch
     r = torch.arange(1, rings + 1, dtype=torch.float32) * (radius / rings)
     a = torch.arange(per_ring, dtype=torch.float32) * (2 * math.pi / per_ring)
     xy = torch.stack([r[:, None] * torch.cos(a), r[:, None] * torch.sin(a)], dim=-1)
@@ -58,6 +60,9 @@ class HeightMap(Observer):
 
     def points(self, ctx: StepContext) -> torch.Tensor:
         """World xy ``(N, K, 2)`` of the grid for every environment."""
+        import torch
+
+        from retarget.geometry.heading import heading_cos_sin
         root = ctx.sim.qpos[:, :3]
         c, s = heading_cos_sin(ctx.sim.qpos[:, 3:7])
         gx, gy = self.grid[:, 0], self.grid[:, 1]
@@ -66,6 +71,7 @@ class HeightMap(Observer):
         return torch.stack([x, y], dim=-1)
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
+        import torch
         n = ctx.num_envs
         if ctx.scene is None:
             return torch.zeros(n, self.grid.shape[0])

@@ -26,13 +26,15 @@ and only re-placed at resets.
 
 from __future__ import annotations
 
-import numpy as np
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
 from retarget import Layout, Observer, ObsSpec, PluginConfig, StepContext
-from retarget.geometry.heading import heading_cos_sin, unyaw
+
+if TYPE_CHECKING:
+    import torch
 
 
 class PointCloudConfig(PluginConfig):
@@ -56,6 +58,7 @@ def _spread_bits(v: torch.Tensor) -> torch.Tensor:
 def morton_order(xy: torch.Tensor, cell: float) -> torch.Tensor:
     """Per row, the permutation sorting points ``(E, C, 2)`` along a Z-order curve of
     ``cell``-sized cells; ties keep pool order (so each cell's points stay a random sample)."""
+    import torch
     ij = torch.floor(xy / cell).long()
     ij = ij - ij.amin(dim=1, keepdim=True)
     code = _spread_bits(ij[..., 0]) | (_spread_bits(ij[..., 1]) << 1)
@@ -91,6 +94,8 @@ class PointCloud(Observer):
 
     def _sample(self, scene, rows: int) -> tuple[torch.Tensor, bool]:
         """Pool points of ``rows`` environments, and whether they are already in Z-order."""
+        import numpy as np
+        import torch
         rng = np.random.default_rng(self.config.seed)
         presorted = False
         if hasattr(scene, "place_surface_points"):  # prop scenes: draw once, place per reset
@@ -109,6 +114,7 @@ class PointCloud(Observer):
 
     def _chunked(self, pts: torch.Tensor, presorted: bool = False) -> tuple[torch.Tensor, ...]:
         """Z-ordered, padded points, their pool indices and chunk boxes for rows ``pts``."""
+        import torch
         e, c = pts.shape[:2]
         size = self.config.chunk
         chunks = -(-c // size)
@@ -127,6 +133,7 @@ class PointCloud(Observer):
         return padded.contiguous(), rank, boxes.amin(2), boxes.amax(2)
 
     def _refresh(self, ctx: StepContext) -> None:
+        import torch
         n = ctx.num_envs
         if self._pool is None or self._scene is not ctx.scene or self._pool.shape[0] != n:
             self._order = self._local = None
@@ -143,6 +150,9 @@ class PointCloud(Observer):
             self._any_dirty = False
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
+        import torch
+
+        from retarget.geometry.heading import heading_cos_sin, unyaw
         n, k, size = ctx.num_envs, self.config.count, self.config.chunk
         out = torch.zeros(n, k, 4)
         if ctx.scene is None:

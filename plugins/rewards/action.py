@@ -7,11 +7,15 @@ actions), so a still, smooth policy earns the full weight and ``k`` means the sa
 
 from __future__ import annotations
 
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
 from retarget import RewardConfig, RewardTerm, StepContext, gaussian_kernel
+
+if TYPE_CHECKING:
+    import torch
 
 
 class ActionDiffConfig(RewardConfig):

@@ -9,11 +9,12 @@ joint or link counts; ``"sum"`` is the paper's form and the default.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Literal
-
-import torch
+from typing import TYPE_CHECKING, Literal
 
 from retarget import Layout, PluginError
+
+if TYPE_CHECKING:
+    import torch
 
 Reduce = Literal["sum", "mean"]
 ROOT = "root"
@@ -34,6 +35,7 @@ def hinge_count(layout: Layout, plugin: str) -> int:
 
 def joint_weight_tensor(layout: Layout, plugin: str) -> torch.Tensor:
     """Per-hinge reward weights from the character (missing weights count as 1)."""
+    import torch
     n = hinge_count(layout, plugin)
     weights = layout.joint_weights or (1.0,) * n
     if len(weights) != n:
@@ -47,6 +49,7 @@ def resolve_bodies(layout: Layout, names: Sequence[str] | None, plugin: str) -> 
     Group names win over body names (``head`` may be both a body and, in some characters, a
     group); duplicates are dropped so a body listed twice does not weigh twice.
     """
+    import torch
     if names is None:
         return torch.arange(layout.num_bodies)
     picked: list[int] = []

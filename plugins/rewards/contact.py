@@ -15,11 +15,15 @@ and four foot bodies).
 
 from __future__ import annotations
 
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
 from retarget import Layout, PluginError, RewardConfig, RewardTerm, StepContext, gaussian_kernel
+
+if TYPE_CHECKING:
+    import torch
 
 
 class FootContactConfig(RewardConfig):
@@ -41,6 +45,7 @@ class FootContact(RewardTerm):
     requires = ("body_group:feet",)
 
     def bind(self, layout: Layout) -> None:
+        import torch
         feet = layout.group("feet")
         self._feet = torch.tensor(feet, dtype=torch.long)
         self._sides: torch.Tensor | None = None

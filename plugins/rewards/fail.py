@@ -9,13 +9,15 @@ context, so no term can see it in ``compute``. This term therefore contributes n
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
-import torch
 from pydantic import Field
 
 import retarget
 from retarget import RewardConfig, RewardTerm, StepContext
+
+if TYPE_CHECKING:
+    import torch
 
 
 class FailPenaltyConfig(RewardConfig):
@@ -35,6 +37,7 @@ class FailPenalty(RewardTerm):
     """Tells the reward manager to call :meth:`penalty` with the failure mask of the step."""
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
+        import torch
         return torch.zeros(ctx.num_envs, dtype=torch.float32)
 
     def penalty(self, failed: torch.Tensor) -> torch.Tensor:

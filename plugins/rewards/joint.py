@@ -9,13 +9,16 @@ of Jesse to 1).
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
-import torch
 from pydantic import Field
 
 import retarget
 from retarget import Layout, RewardConfig, RewardTerm, StepContext, gaussian_kernel
 from retarget.plugins.rewards.common import Reduce, joint_weight_tensor, weighted_sq_distance
+
+if TYPE_CHECKING:
+    import torch
 
 
 class JointPosConfig(RewardConfig):
@@ -38,6 +41,7 @@ class JointPos(RewardTerm):
         self._weights = joint_weight_tensor(layout, self.name)
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
+        import torch
         diff = ctx.sim.qpos[:, 7:] - ctx.ref.pose.qpos[:, 7:]
         diff = torch.remainder(diff + math.pi, 2 * math.pi) - math.pi
         d = weighted_sq_distance(diff, self._weights, self.config.reduce)

@@ -9,12 +9,16 @@ default (all bodies) works for any character.
 
 from __future__ import annotations
 
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
 from retarget import Layout, RewardConfig, RewardTerm, StepContext, gaussian_kernel
 from retarget.plugins.rewards.common import Reduce, resolve_bodies, weighted_sq_distance
+
+if TYPE_CHECKING:
+    import torch
 
 _BODIES = "group names, body names or 'root'; null tracks every body"
 _RELATIVE = (
@@ -35,6 +39,7 @@ class _LinkTerm(RewardTerm):
     """Shared body selection and distance of the two link terms."""
 
     def bind(self, layout: Layout) -> None:
+        import torch
         self._idx = resolve_bodies(layout, self.config.bodies, self.name)
         self._weights = torch.ones(len(self._idx), dtype=torch.float32)
 

@@ -9,12 +9,15 @@ human orientations; this term reads them there.
 
 from __future__ import annotations
 
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
 from retarget import Layout, RewardConfig, RewardTerm, StepContext, gaussian_kernel
-from retarget.geometry.heading import rotation_distance
+
+if TYPE_CHECKING:
+    import torch
 
 
 class OrientationConfig(RewardConfig):
@@ -36,12 +39,16 @@ class Orientation(RewardTerm):
     requires = ("site:head",)
 
     def bind(self, layout: Layout) -> None:
+        import torch
         self._head = layout.site("head")
         self._weights = torch.tensor(
             [self.config.root_weight, self.config.head_weight], dtype=torch.float32
         )
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
+        import torch
+
+        from retarget.geometry.heading import rotation_distance
         h = self._head
         # root and head in one (N, 2, 4) batch: one product and one atan2 for both
         ref = torch.stack([ctx.ref.pose.qpos[:, 3:7], ctx.ref.pose.site_quat[:, h]], dim=1)

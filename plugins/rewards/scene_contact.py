@@ -19,9 +19,8 @@ avatars (a 70 kg human's foot carries ~340 N); scale it down for small ones (Opp
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
-import torch
 from pydantic import Field
 
 import retarget
@@ -29,6 +28,9 @@ from retarget import Layout, PluginError, RewardConfig, RewardTerm, StepContext,
 from retarget.kinds.state import SCENE_CONTACTS
 from retarget.scene.contacts import CONTACT_LINKS as LINKS
 from retarget.scene.contacts import CONTACT_NEWTONS
+
+if TYPE_CHECKING:
+    import torch
 
 
 class SceneContactConfig(RewardConfig):
@@ -52,6 +54,7 @@ class SceneContact(RewardTerm):
     requires = tuple(f"body_group:{g}" for g in LINKS)
 
     def bind(self, layout: Layout) -> None:
+        import torch
         groups = list(layout.body_groups)
         missing = [g for g in self.config.groups if g not in layout.body_groups]
         if missing:

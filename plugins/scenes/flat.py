@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
-import mujoco
-import numpy as np
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
 from retarget.kinds import PluginConfig, Scene
 from retarget.scene.floor import add_floor
+
+if TYPE_CHECKING:
+    import mujoco
+    import numpy as np
+    import torch
 
 
 class FlatConfig(PluginConfig):
@@ -39,9 +43,11 @@ class Flat(Scene):
         self._num_envs = num_envs
 
     def height_at(self, xy: torch.Tensor) -> torch.Tensor:
+        import torch
         return torch.zeros(xy.shape[:-1], dtype=torch.float32)
 
     def surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
+        import numpy as np
         e = self.config.extent
         pts = np.zeros((count, 3))
         pts[:, :2] = rng.uniform(-e, e, size=(count, 2))

@@ -21,17 +21,19 @@ scene is not randomized. Without ``path`` the scene is the bare floor.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
-import mujoco
-import numpy as np
-import torch
 from pydantic import Field
 
 import retarget
 from retarget.errors import PluginError
 from retarget.kinds import PluginConfig, Scene
 from retarget.scene.floor import add_floor
+
+if TYPE_CHECKING:
+    import mujoco
+    import numpy as np
+    import torch
 
 RAY_START = 100.0  # metres above the mesh top where the rasterising rays start
 
@@ -47,6 +49,7 @@ class MeshConfig(PluginConfig):
 
 def load_mesh(cfg: MeshConfig):
     """The file as one triangle mesh in metres, +Z up; errors name the file."""
+    import numpy as np
     import trimesh
 
     path = Path(cfg.path or "")
@@ -80,6 +83,8 @@ class MeshScene(Scene):
     def _rasterise(self) -> dict:
         """Top-surface heights on a grid over the mesh's footprint (grid points at the
         corners of ``resolution`` cells, as MuJoCo's height field places its samples)."""
+        import mujoco
+        import numpy as np
         mesh, res = self.mesh, self.config.resolution
         lo, hi = mesh.bounds[0, :2], mesh.bounds[1, :2]
         ncol = max(int(np.ceil((hi[0] - lo[0]) / res)) + 1, 2)
@@ -113,6 +118,7 @@ class MeshScene(Scene):
             self._add_hulls(spec)
 
     def _add_heightfield(self, spec: mujoco.MjSpec) -> None:
+        import mujoco
         g = self._grid
         h = g["heights"]
         zmax = float(h.max())
@@ -138,6 +144,8 @@ class MeshScene(Scene):
         )
 
     def _add_hulls(self, spec: mujoco.MjSpec) -> None:
+        import mujoco
+        import numpy as np
         for k, piece in enumerate(self.mesh.split(only_watertight=False)):
             verts = np.asarray(piece.vertices, dtype=float)
             if len(verts) < 3:
@@ -160,6 +168,7 @@ class MeshScene(Scene):
         self._num_envs = num_envs
 
     def height_at(self, xy: torch.Tensor) -> torch.Tensor:
+        import torch
         if self._grid is None:
             return torch.zeros(xy.shape[:-1], dtype=torch.float32)
         g = self._grid
@@ -184,6 +193,7 @@ class MeshScene(Scene):
         return torch.where(inside, out, torch.zeros_like(out)).float()
 
     def surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
+        import numpy as np
         if self.mesh is None:
             pts = np.zeros((count, 3))
             pts[:, :2] = rng.uniform(-2.0, 2.0, size=(count, 2))

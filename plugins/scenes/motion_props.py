@@ -21,17 +21,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
-import yaml
 from pydantic import Field, ValidationError
 
 import retarget
 from retarget.errors import PluginError
 from retarget.kinds import PluginConfig
-from retarget.motion.clip import MotionClip
-from retarget.motion.scene_fit import FittedProp, fit_props
 from retarget.scene.props import Prop, PropScene, Randomization, box
+
+if TYPE_CHECKING:
+    from retarget.motion.clip import MotionClip
+    from retarget.motion.scene_fit import FittedProp
 
 
 class PropSpec(PluginConfig):
@@ -65,6 +66,7 @@ def sidecar_path(source: Path) -> Path:
 
 def read_sidecar(path: Path) -> tuple[PropSpec, ...]:
     """The props of a sidecar file; errors name the file and the field."""
+    import yaml
     try:
         raw = yaml.safe_load(path.read_text()) or {}
         return ClipProps.model_validate(raw).props
@@ -93,6 +95,7 @@ class MotionProps(PropScene):
         super().__init__(config)
 
     def fit_motion(self, clips: Sequence[MotionClip]) -> None:
+        from retarget.motion.scene_fit import fit_props
         cfg: MotionPropsConfig = self.config  # type: ignore[assignment]
         specs: list[tuple[str, PropSpec]] = []
         for clip in clips:

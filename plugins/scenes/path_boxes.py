@@ -19,14 +19,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
-import torch
 from pydantic import Field, model_validator
 
 import retarget
 from retarget.kinds import PluginConfig
-from retarget.motion.clip import MotionClip
 from retarget.scene.props import Prop, PropScene, Randomization, box
+
+if TYPE_CHECKING:
+    import torch
+
+    from retarget.motion.clip import MotionClip
 
 PARK = (-50.0, -50.0)
 """Where boxes stand in the compiled model and when unused: far from any motion."""
@@ -67,6 +71,7 @@ class PathBoxes(PropScene):
     Config = PathBoxesConfig
 
     def __init__(self, config: PluginConfig | None = None) -> None:
+        import torch
         super().__init__(config)
         self._path_xy = torch.zeros(0, 1, 2, dtype=torch.float64)
         self._path_yaw = torch.zeros(0, 1, dtype=torch.float64)
@@ -92,6 +97,7 @@ class PathBoxes(PropScene):
     def fit_motion(self, clips: Sequence[MotionClip]) -> None:
         """Ground path (root x, y), walking direction and distance walked per frame of every
         clip, padded to the longest clip; frames are the clips' own (``fps`` per clip)."""
+        import torch
         cfg: PathBoxesConfig = self.config  # type: ignore[assignment]
         longest = max((c.num_frames for c in clips), default=1)
         n = len(clips)
@@ -112,6 +118,7 @@ class PathBoxes(PropScene):
                 self._path_step[i, : t - 1] = (xy[1:] - xy[:-1]).norm(dim=-1)
 
     def allocate(self, num_envs: int) -> None:
+        import torch
         super().allocate(num_envs)
         self._clip = torch.zeros(num_envs, dtype=torch.long)
         self._start = torch.zeros(num_envs, dtype=torch.long)
@@ -119,6 +126,7 @@ class PathBoxes(PropScene):
     def start_episodes(
         self, env_ids: torch.Tensor, clip: torch.Tensor, seconds: torch.Tensor
     ) -> None:
+        import torch
         if not self._allocated:
             self.allocate(int(env_ids.max()) + 1)
         clip = clip.long()
@@ -134,6 +142,7 @@ class PathBoxes(PropScene):
         """Per box: a frame of the path drawn in proportion to the distance walked there
         (frames after the start when ``ahead``, at least ``clear`` from the start), a
         sideways offset, a height; then the configured extra noise. Vectorised over envs."""
+        import torch
         cfg: PathBoxesConfig = self.config  # type: ignore[assignment]
         e, k = int(env_ids.numel()), len(self._props)
         if e == 0:

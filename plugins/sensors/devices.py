@@ -14,12 +14,15 @@ reports the loss of 1 s of future as a moderate drop in success rate).
 
 from __future__ import annotations
 
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
 from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
-from retarget.geometry.heading import ground_origin, heading_cos_sin, quat_to_6d, unyaw
+
+if TYPE_CHECKING:
+    import torch
 
 DEVICES = ("headset", "left", "right")
 """Device order along the ``D`` axis of ``ref.devices``."""
@@ -69,6 +72,7 @@ class _DeviceSensor(Sensor):
 
         A slice when they are consecutive (the usual case: a view, no copy), else an index.
         """
+        import torch
         if self._window_cache is not None and self._window_cache[0] == offsets:
             return self._window_cache[1]
         wanted = range(-self.config.past, self.config.future + 1)
@@ -92,6 +96,9 @@ class _DeviceSensor(Sensor):
         """Positions ``(N, F, d, 3)`` and 6D rotations ``(N, F, d, 6)`` of the first ``count``
         devices in the heading frame (device quaternions are unit, as ``ReferenceBatch`` says).
         """
+        import torch
+
+        from retarget.geometry.heading import ground_origin, heading_cos_sin, quat_to_6d, unyaw
         if ctx.ref.devices.shape[2] < count:
             raise PluginError(
                 f"needs {count} devices (headset, left, right) but the reference has "
@@ -124,6 +131,7 @@ class Hmd(_DeviceSensor):
         return 9
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
+        import torch
         pos, rot = self._devices(ctx, 1)
         return torch.cat([pos, rot], dim=-1).reshape(ctx.num_envs, -1).float()
 
@@ -145,6 +153,7 @@ class ThreePoint(_DeviceSensor):
         return 27 if self.config.controller_rotation else 15
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
+        import torch
         pos, rot = self._devices(ctx, 3)
         if self.config.controller_rotation:
             per_device = torch.cat([pos, rot], dim=-1)  # (N, F, 3, 9)

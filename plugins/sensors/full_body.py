@@ -14,20 +14,15 @@ training and only has to learn the balance corrections.
 
 from __future__ import annotations
 
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field, field_validator
 
 import retarget
 from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
-from retarget.geometry.heading import (
-    ground_origin,
-    heading_cos_sin,
-    quat_conj,
-    quat_mul,
-    quat_to_6d,
-    to_heading_quats,
-    unyaw,
-)
+
+if TYPE_CHECKING:
+    import torch
 
 
 def _offsets_valid(value: list[int]) -> list[int]:
@@ -71,6 +66,17 @@ class FullBody(Sensor):
         return ObsSpec((len(self.config.offsets) * per,))
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
+        import torch
+
+        from retarget.geometry.heading import (
+            ground_origin,
+            heading_cos_sin,
+            quat_conj,
+            quat_mul,
+            quat_to_6d,
+            to_heading_quats,
+            unyaw,
+        )
         s = ctx.sim
         root_pos, root_quat = s.qpos[:, :3], s.qpos[:, 3:7]
         c, sn = heading_cos_sin(root_quat)
@@ -116,6 +122,7 @@ class ReferenceAction(Sensor):
     Config = ReferenceActionConfig
 
     def bind(self, layout: Layout) -> None:
+        import torch
         if len(layout.actuator_qpos) != layout.nu or len(layout.actuator_ranges) != layout.nu:
             raise PluginError(
                 "the layout does not say which joint each actuator drives (actuator_qpos, "
@@ -137,6 +144,7 @@ class ReferenceAction(Sensor):
         return ObsSpec((layout.nu,))
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
+        import torch
         ref = ctx.ref.future[self.config.offset]
         target = ref.qpos[:, self._qpos] / self._scale
         return torch.maximum(torch.minimum(target, self._high), self._low).float()

@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
 from retarget import PluginConfig, StepContext, Termination
+
+if TYPE_CHECKING:
+    import torch
 
 
 class EpisodeCapConfig(PluginConfig):

@@ -18,11 +18,15 @@ Oppy whose arm brushes its own torso is not counted as fallen.
 
 from __future__ import annotations
 
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
 from retarget import Layout, PluginConfig, StepContext, Termination
+
+if TYPE_CHECKING:
+    import torch
 
 
 class FallConfig(PluginConfig):
@@ -40,9 +44,11 @@ class Fall(Termination):
     requires = ("body_group:upper_body",)
 
     def bind(self, layout: Layout) -> None:
+        import torch
         self._bodies = torch.tensor(layout.group("upper_body"), dtype=torch.long)
 
     def check(self, ctx: StepContext) -> torch.Tensor:
+        import torch
         pos = ctx.sim.body_pos[:, self._bodies]  # (N, K, 3)
         ground = (
             ctx.scene.height_at(pos[..., :2])

@@ -7,11 +7,15 @@ near zero and teach nothing; ending the episode (with the fail penalty) is the u
 
 from __future__ import annotations
 
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
 from retarget import PluginConfig, StepContext, Termination
+
+if TYPE_CHECKING:
+    import torch
 
 
 class RootDistanceConfig(PluginConfig):

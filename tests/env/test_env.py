@@ -160,7 +160,7 @@ def test_time_out_at_clip_end_and_fail_penalty() -> None:
         clips,
         rewards=rewards,
         terminations={"root_distance": fall},
-        options=EnvOptions(num_envs=4, sim=SimSettings(threads=1)),
+        options=EnvOptions(num_envs=4), sim=SimSettings(threads=1),
     )
     env.reset()
     env.frame[:] = env.library.length[env.clip] - 1

@@ -89,7 +89,7 @@ def test_contact_reward_on_real_contact_forces() -> None:
     idle = default_motions(names=("idle",))
     term = SceneContact()
     env = RetargetEnv(
-        Human(), idle, rewards={"contact": term}, options=EnvOptions(num_envs=2, seed=0)
+        Human(), idle, rewards={"contact": term}, options=EnvOptions(num_envs=2), seed=0
     )
     env.place(torch.zeros(2, dtype=torch.long), torch.tensor([0, 30]))
     for _ in range(3):

@@ -6,10 +6,14 @@ say ``rewards: {head_height: {weight: 0.2}}``.
 
 from __future__ import annotations
 
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
+
+if TYPE_CHECKING:
+    import torch
 
 
 class HeadHeightConfig(retarget.RewardConfig):

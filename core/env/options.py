@@ -1,0 +1,25 @@
+"""The tracking environment's own settings: the recipe's ``env`` section, used as is."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class EnvOptions(BaseModel):
+    """Environment settings that are not plugins (plugins configure the rest)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    num_envs: int = Field(256, ge=1, description="environments stepped together")
+    privileged_offsets: tuple[int, ...] = Field(
+        (1, 3, 6), description="future reference frames the critic sees (asymmetric critic)"
+    )
+    reset_lift: float = Field(
+        0.02, ge=0, description="root lift at reset, m (kinematic feet penetrate a bit)"
+    )
+    groups: dict[str, list[str]] | None = Field(
+        None,
+        description="observation groups: name -> sources (sensor/observer names, 'proprio', "
+        "'privileged'); default actor = sensors + proprio + observers, critic = actor + "
+        "privileged",
+    )
