@@ -1,7 +1,9 @@
 """retarget: drive physically simulated avatars of any body shape from VR headset signals.
 
-The public API: ``hookimpl`` for plugin modules, the plugin base classes, the recipe loader and
-the step data structures. Everything else is an implementation detail.
+The public API: ``hookimpl`` for plugin modules, the plugin base classes, the plugin loader and
+the step data structures. Plugins may also import the toolkit modules declared in
+:data:`retarget.testing.toolkit.TOOLKIT` (character builder, joint maps, rotations, the
+prop-scene base, ...); everything else is an implementation detail.
 """
 
 from __future__ import annotations

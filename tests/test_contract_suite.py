@@ -9,6 +9,7 @@ import contract_doubles as d
 import mujoco
 import pytest
 import torch
+from doubles_outside_toolkit import Internal
 from pydantic import ConfigDict
 
 import retarget
@@ -281,6 +282,7 @@ BROKEN = [
     (checks.check_config_strict, RequiredConfig),
     (checks.check_config_schema, NoSchema),
     (checks.check_registers_cleanly, Unregistered),
+    (checks.check_uses_toolkit, Internal),
     (checks.check_entry_point, d.GoodReward),
     (checks.check_batched_shapes, WrongShape),
     (checks.check_finite, NotFinite),

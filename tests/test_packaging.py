@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import importlib
 import tomllib
 
 from helpers import REPO
 
 from retarget.registry.loader import load_plugins
+from retarget.testing.toolkit import TOOLKIT, toolkit_violations
 
 
 def _pyproject() -> dict:
@@ -34,14 +36,25 @@ def test_builtin_entry_points_all_load_strictly() -> None:
     assert set(eps) <= providers, f"entry points registering nothing: {set(eps) - providers}"
 
 
-def test_builtins_use_only_the_public_api() -> None:
-    """Built-in plugins import retarget's public names, never private helpers."""
-    offenders = []
-    for path in (REPO / "plugins").rglob("*.py"):
-        text = path.read_text()
-        if "from retarget._" in text or "import retarget._" in text:
-            offenders.append(str(path.relative_to(REPO)))
-    assert not offenders, offenders
+def test_plugins_import_only_the_declared_toolkit() -> None:
+    """Built-in plugins and the third-party example import from retarget only what
+    :data:`retarget.testing.toolkit.TOOLKIT` declares (an allow-list: anything else fails)."""
+    builtins = list((REPO / "plugins").rglob("*.py"))
+    example = list((REPO / "examples" / "third_party_plugin" / "src").rglob("*.py"))
+    bad = toolkit_violations(builtins, "retarget.plugins")
+    bad += toolkit_violations(example, "retarget_head_height")
+    assert not bad, "\n".join(bad)
+
+
+def test_toolkit_guard_refuses_an_internal_import(tmp_path) -> None:
+    plugin = tmp_path / "plugin.py"
+    plugin.write_text("from retarget.env.managers import RewardManager\nimport retarget.cli.main\n")
+    assert len(toolkit_violations([plugin], "mine")) == 2
+
+
+def test_toolkit_modules_exist() -> None:
+    for entry in TOOLKIT:
+        importlib.import_module(entry.removesuffix(".*"))
 
 
 def test_ci_runs_the_readme_test_command() -> None:

@@ -101,7 +101,11 @@ def _load(strict: bool) -> Registry:
 
 def main(argv: Sequence[str] | None = None) -> int:
     from retarget.cli.console import error
+
     argv = list(sys.argv[1:] if argv is None else argv)
+    if argv == ["--version"]:  # answered before any plugin is loaded
+        print(f"retarget {retarget.__version__}")
+        return 0
     strict = "--strict-plugins" in argv or strict_from_env()
     try:
         registry = _load(strict)

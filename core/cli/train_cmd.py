@@ -8,7 +8,7 @@ from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
 
 from retarget.cli.numbers import amount, count
-from retarget.cli.recipe_cmd import add_recipe_flags, load_from_args
+from retarget.cli.recipe_args import add_recipe_flags, load_from_args
 from retarget.errors import RecipeError
 from retarget.registry import Registry
 from retarget.train.run_dir import (

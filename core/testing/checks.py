@@ -33,6 +33,7 @@ from retarget.registry.loader import load_plugins
 from retarget.sim.world import build_world
 from retarget.testing.fakes import FakeVecEnv, TinyCharacter, fake_context, tiny_world
 from retarget.testing.guard import NoPerEnvLoops
+from retarget.testing.toolkit import check_uses_toolkit
 from retarget.train.checkpoint import SAFE_GLOBALS
 
 Check = Callable[[object], None]
@@ -477,6 +478,7 @@ COMMON: tuple[Check, ...] = (
     check_config_strict,
     check_config_schema,
     check_registers_cleanly,
+    check_uses_toolkit,
 )
 STEP: tuple[Check, ...] = (
     check_batched_shapes,

@@ -6,7 +6,7 @@ import math
 
 from retarget_head_height import HeadHeight
 
-from retarget.registry.loader import load_plugins
+from retarget import load_plugins
 from retarget.testing import parametrize_with_checks
 
 

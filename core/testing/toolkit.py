@@ -1,0 +1,126 @@
+"""The declared toolkit: the retarget modules a plugin may import, and a check that it does.
+
+Everything not listed here is an implementation detail that may change between releases.
+Built-in plugins are held to the same list as third-party ones (the contract suite runs
+:func:`check_uses_toolkit` on every plugin), so the list is exactly what a plugin needs.
+A package entry (one ending in ``.*``) admits the package and its submodules.
+"""
+
+from __future__ import annotations
+
+import ast
+import inspect
+import sys
+from collections.abc import Iterable
+from pathlib import Path
+
+TOOLKIT: dict[str, str] = {
+    "retarget": "the plugin API: base classes, step state, hookimpl, errors (``retarget.__all__``)",
+    "retarget.errors": "errors a user can act on",
+    "retarget.kinds.*": "the base class of each plugin kind and the step data they see",
+    "retarget.character.builder": "procedural MJCF for characters (BodyBuilder and helpers)",
+    "retarget.character.joint_map": "which human joints drive which character joints",
+    "retarget.character.kinematic": "kinematic retargeting of a clip onto a character",
+    "retarget.geometry.heading": "batched torch rotations and the character's heading frame",
+    "retarget.geometry.rotations": "numpy quaternions for motion data",
+    "retarget.scene.props": "the prop-scene base class (boxes, chairs, couches, ...)",
+    "retarget.scene.floor": "the ground plane",
+    "retarget.scene.contacts": "the links and force threshold of scene-contact labels",
+    "retarget.motion.clip": "MotionClip, what motion formats read and write",
+    "retarget.motion.skeleton": "the canonical human skeleton",
+    "retarget.motion.procedural": "generated clips (idle, walk) for defaults and tests",
+    "retarget.motion.sources": "loading the clips of a path with the registered formats",
+    "retarget.motion.import_bvh": "reading BVH into canonical clips",
+    "retarget.motion.bvh_write": "writing clips as BVH",
+    "retarget.motion.scene_fit": "fitting props to where a clip sits and steps",
+    "retarget.learn.*": "building blocks of algorithm plugins (networks, PPO, DAgger, ...)",
+    "retarget.env": "the tracking environment (``RetargetEnv``, ``random_actions``)",
+    "retarget.env.build": "building an environment from a resolved recipe",
+    "retarget.recipe": "reading, resolving and overriding recipes",
+    "retarget.train.load": "loading a trained run (recipe lock, algorithm, weights)",
+    "retarget.train.run_dir": "run directories: resolving, latest checkpoint, lock file name",
+    "retarget.cli.recipe_args": "the recipe argument and override flags for command plugins",
+    "retarget.render.*": "offscreen pictures and videos of characters, clips and rollouts",
+    "retarget.testing.*": "the contract suite and its test doubles",
+}
+"""Module -> what a plugin uses it for."""
+
+
+def allowed(module: str) -> bool:
+    """Whether ``module`` (dotted) is part of the declared toolkit."""
+    for entry in TOOLKIT:
+        if entry.endswith(".*"):
+            package = entry[:-2]
+            if module == package or module.startswith(package + "."):
+                return True
+        elif module == entry:
+            return True
+    return False
+
+
+def _imports(tree: ast.AST) -> Iterable[tuple[int, str]]:
+    """(line, module) of every absolute retarget import; ``from pkg import name`` counts as
+    ``pkg.name`` when that names a module, else as ``pkg``."""
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield node.lineno, alias.name
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            if node.module == "retarget":
+                yield node.lineno, "retarget"
+                continue
+            for alias in node.names:
+                sub = f"{node.module}.{alias.name}"
+                yield node.lineno, sub if sub in sys.modules or _is_module(sub) else node.module
+
+
+def _is_module(dotted: str) -> bool:
+    import importlib.util
+
+    try:
+        return importlib.util.find_spec(dotted) is not None
+    except (ImportError, ValueError):
+        return False
+
+
+def toolkit_violations(files: Iterable[Path], own: str) -> list[str]:
+    """``path:line module`` for each retarget import in ``files`` that is neither the
+    toolkit nor the plugin's own package ``own`` (a dotted prefix)."""
+    found = []
+    for path in files:
+        tree = ast.parse(Path(path).read_text(encoding="utf-8"), filename=str(path))
+        for line, module in _imports(tree):
+            top = module.split(".")[0]
+            if module == own or module.startswith(own + "."):
+                continue
+            if top == "retarget" and not allowed(module):
+                found.append(f"{path}:{line} imports {module}")
+    return found
+
+
+def own_package(cls: type) -> str:
+    """The package a plugin class ships in: ``retarget.plugins`` for built-ins, else the top
+    level package of its module."""
+    module = cls.__module__
+    for package in ("retarget.plugins", "retarget.testing"):  # built-ins, the suite's doubles
+        if module.startswith(package + "."):
+            return package
+    return module.split(".")[0]
+
+
+def check_uses_toolkit(plugin: object) -> None:
+    """The plugin's module imports only toolkit modules from retarget (beside its own)."""
+    cls = plugin if isinstance(plugin, type) else type(plugin)
+    source = inspect.getsourcefile(cls)
+    if source is None:  # defined interactively: nothing to read
+        return
+    own = own_package(cls)
+    if own == "retarget":
+        raise AssertionError(
+            f"{cls.__qualname__} lives inside retarget ({cls.__module__}) but outside "
+            "retarget.plugins: plugins ship in their own package"
+        )
+    bad = toolkit_violations([Path(source)], own)
+    assert not bad, "imports outside the declared toolkit (retarget.testing.toolkit):\n" + (
+        "\n".join(bad)
+    )
