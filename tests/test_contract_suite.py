@@ -198,6 +198,15 @@ class BrokenBuild(d.GoodScene):
         raise ValueError("no floor for you")
 
 
+class Backwards(d.GoodReward):
+    """Asks for the reference 0 frames ahead (offsets are frames >= 1)."""
+
+    name = "backwards"
+
+    def needs(self):
+        return retarget.StepNeeds(reference_offsets=(0,))
+
+
 class FlatHeights(d.GoodScene):
     """Returns one height per environment instead of per point."""
 
@@ -284,6 +293,7 @@ BROKEN = [
     (checks.check_registers_cleanly, Unregistered),
     (checks.check_uses_toolkit, Internal),
     (checks.check_entry_point, d.GoodReward),
+    (checks.check_needs, Backwards),
     (checks.check_batched_shapes, WrongShape),
     (checks.check_finite, NotFinite),
     (checks.check_batch_invariance, Coupled),

@@ -80,7 +80,7 @@ def _add_plugin_command(sub: argparse._SubParsersAction, cls: type[Command], plu
     command.add_arguments(parser)
 
     def handler(args: argparse.Namespace, registry: Registry) -> int:
-        args.registry = registry
+        command.connect(registry)
         return int(command.run(args) or 0)
 
     parser.set_defaults(handler=handler, plugin_name=plugin)

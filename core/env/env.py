@@ -6,9 +6,11 @@ One control step, in order (DESIGN.md §5):
    physics steps (:class:`~retarget.sim.BatchedSim`);
 2. every environment's reference advances one frame (the library is at the control rate);
 3. a frozen :class:`~retarget.kinds.state.StepContext` is built: sim state, reference pose,
-   device window, contact labels, privileged future frames;
-4. rewards (weighted sum, per-term logs), terminations (failure vs time-out; a clip's end is
-   a time-out), failure penalties;
+   device window, contact labels, and what some plugin ``needs()`` (future reference
+   frames, scene contact labels);
+4. terminations (failure vs time-out; a clip's end is a time-out), then rewards (weighted
+   sum, per-term logs) from a context that says which environments failed
+   (``ctx.terminated``: the fail penalty is an ordinary term);
 5. if any environment timed out, the observations it ended in are returned as
    ``info["final_obs"]`` (PPO bootstraps time-outs from them; failures need none);
 6. finished environments restart from random reference frames (RSI), then every group's
@@ -23,24 +25,21 @@ from __future__ import annotations
 
 import time
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 
 import mujoco
 import numpy as np
 import torch
 
 from retarget.env.managers import RewardManager, TerminationManager
-from retarget.env.observations import (
-    FUTURE_POS,
-    privileged,
-    privileged_size,
-    proprio,
-    proprio_size,
-)
+from retarget.env.observation_manager import ObservationManager, PluginSource
+from retarget.env.observations import Privileged, Proprio
 from retarget.env.options import EnvOptions
 from retarget.env.reference import CharacterReference
-from retarget.errors import PluginError, RecipeError
+from retarget.errors import PluginError
 from retarget.kinds import Character, Observer, RewardTerm, Scene, Sensor, Termination
-from retarget.kinds.state import SCENE_CONTACTS, ReferenceBatch, StepContext
+from retarget.kinds.state import ReferenceBatch, StepContext
+from retarget.kinds.step import StepNeeds, StepPlugin
 from retarget.motion.clip import MotionClip
 from retarget.motion.library import MotionLibrary
 from retarget.motion.resample import resample
@@ -91,20 +90,25 @@ class RetargetEnv:
         past = max([s.frames_needed()[0] for s in self.sensors] + [0])
         future = max([s.frames_needed()[1] for s in self.sensors] + [0])
         self.window_offsets = tuple(range(-past, future + 1))
-        self.reference_offsets = self._reference_offsets()
-        self._sources = self._observation_sources()
-        self.groups = {k: list(v) for k, v in (opts.groups or self._default_groups()).items()}
-        for group, names in self.groups.items():
-            unknown = [s for s in names if s not in self._sources]
-            if unknown:
-                raise RecipeError(
-                    f"observation group '{group}' names unknown sources {unknown}",
-                    field=f"env.groups.{group}",
-                    hint=f"available: {', '.join(self._sources)}",
-                )
-        self.obs_dims = {
-            g: sum(self._sources[s][1] for s in names) for g, names in self.groups.items()
-        }
+        self.observations = ObservationManager(
+            [
+                *(PluginSource.of(p, layout) for p in (*self.sensors, *self.observers)),
+                Proprio(layout),
+                Privileged(layout, tuple(opts.privileged_offsets)),
+            ],
+            opts.groups or self._default_groups(),
+        )
+        self.groups = self.observations.groups
+        self.obs_dims = self.observations.dims
+        for plugin in (*self.sensors, *self.observers, *self.rewards.terms.values(),
+                       *self.terminations.terms.values()):  # fmt: skip
+            _check_needs(plugin)
+        self._needs = StepNeeds()
+        self.gather(
+            self.observations.needs,
+            *(t.needs() for t in self.rewards.terms.values()),
+            *(t.needs() for t in self.terminations.terms.values()),
+        )
         self.action_dim = layout.nu
         self.generator = torch.Generator().manual_seed(seed)
         self.clip = torch.zeros(n, dtype=torch.long)
@@ -119,19 +123,22 @@ class RetargetEnv:
             ("reference", "rewards", "terminations", "observations", "resets"), 0.0
         )
 
-    def _reference_offsets(self) -> tuple[int, ...]:
-        """Sorted union of the future frames sensors read the full reference at."""
-        wanted: set[int] = set()
-        for plugin in (*self.sensors, *self.observers):
-            offsets = tuple(plugin.reference_offsets())
-            bad = [k for k in offsets if not isinstance(k, int) or k < 1]
+    def gather(self, *needs: StepNeeds) -> None:
+        """Gather more for every later step (evaluation asks for the scene contact labels its
+        metrics read); offsets are frames ``>= 1`` ahead."""
+        for need in needs:
+            bad = [k for k in need.reference_offsets if not isinstance(k, int) or k < 1]
             if bad:
                 raise PluginError(
-                    f"reference_offsets() returned {bad}; offsets are ints >= 1 (frames ahead)",
-                    plugin=f"{plugin.kind} {plugin.name}",
+                    f"needs() asks for reference offsets {bad}; offsets are ints >= 1 "
+                    "(frames ahead)"
                 )
-            wanted.update(offsets)
-        return tuple(sorted(wanted))
+            self._needs = self._needs | need
+
+    @property
+    def step_needs(self) -> StepNeeds:
+        """What each step gathers beyond the state and the reference pose."""
+        return self._needs
 
     def _scene_mocap_ids(self) -> np.ndarray:
         """Indices into ``mocap_pos`` of the scene's props, resolved once; sizes the scene's
@@ -153,27 +160,15 @@ class RetargetEnv:
 
     # ------------------------------------------------------------------ observations
 
-    def _observation_sources(self) -> dict[str, tuple[object, int]]:
-        layout = self.layout
-        frames = len(self.options.privileged_offsets)
-        sources: dict[str, tuple[object, int]] = {
-            "proprio": (proprio, proprio_size(layout)),
-            "privileged": (privileged, privileged_size(layout, frames)),
-        }
-        for plugin in (*self.sensors, *self.observers):
-            sources[plugin.name] = (plugin.observe, plugin.spec(layout).size)
-        return sources
-
     def observation_size(self, source: str) -> int:
         """Width of one observation source (``proprio``, a sensor's or observer's name)."""
-        return int(self._sources[source][1])
+        return int(self.observations.sources[source].size)
 
     @property
     def obs_layout(self) -> dict[str, list[tuple[str, int]]]:
         """Each group's sources in column order, ``(name, size)``: which columns of a group
         come from which sensor or observer (used to carry weights between recipes)."""
-        sizes = {name: int(source[1]) for name, source in self._sources.items()}
-        return {g: [(s, sizes[s]) for s in names] for g, names in self.groups.items()}
+        return self.observations.layout
 
     def _default_groups(self) -> dict[str, list[str]]:
         actor = [s.name for s in self.sensors] + ["proprio"] + [o.name for o in self.observers]
@@ -181,17 +176,7 @@ class RetargetEnv:
 
     def observe(self, ctx: StepContext) -> dict[str, torch.Tensor]:
         """Every group's ``(N, D)`` observation; each source is computed once per step."""
-        cache: dict[str, torch.Tensor] = {}
-        out = {}
-        for group, names in self.groups.items():
-            parts = []
-            for name in names:
-                if name not in cache:
-                    fn = self._sources[name][0]
-                    cache[name] = fn(ctx).reshape(ctx.num_envs, -1)  # type: ignore[operator]
-                parts.append(cache[name])
-            out[group] = torch.nan_to_num(torch.cat(parts, dim=-1), 0.0, 0.0, 0.0)
-        return out
+        return self.observations.compute(ctx)
 
     # ------------------------------------------------------------------ reference
 
@@ -199,24 +184,21 @@ class RetargetEnv:
         lib = self.library
         rows = lib.rows(self.clip, self.frame)[:, 0]
         devices = lib.devices[lib.rows(self.clip, self.frame, self.window_offsets)]
-        future = lib.rows(self.clip, self.frame, self.options.privileged_offsets)
+        need = self._needs
         ahead = {}
-        if self.reference_offsets:
-            ahead_rows = lib.rows(self.clip, self.frame, self.reference_offsets)
+        if need.reference_offsets:
+            ahead_rows = lib.rows(self.clip, self.frame, need.reference_offsets)
             ahead = {
                 k: self.reference.pose(ahead_rows[:, i])
-                for i, k in enumerate(self.reference_offsets)
+                for i, k in enumerate(need.reference_offsets)
             }
         ref = ReferenceBatch(
             pose=self.reference.pose(rows),
             devices=devices,
             window_offsets=self.window_offsets,
             contacts=lib.contacts[rows],
-            extras={
-                FUTURE_POS: self.reference.arrays["body_pos"][future],
-                SCENE_CONTACTS: self.reference.scene_contacts[rows],
-            },
             future=ahead,
+            scene_contacts=self.reference.scene_contacts[rows] if need.scene_contacts else None,
         )
         return StepContext(
             layout=self.layout,
@@ -286,16 +268,17 @@ class RetargetEnv:
         self.frame, clip_end = self.library.advance(self.clip, self.frame)
         self.episode_step += 1
         ctx = self._context(action)
-        self.last_context = ctx  # the step's state before any reset (evaluation reads it)
         t1 = time.perf_counter()
-        reward = self.rewards.compute(ctx, valid=~bad)
-        t2 = time.perf_counter()
         failed, timed_out = self.terminations.check(ctx)
-        t3 = time.perf_counter()
         failed |= bad
         timed_out = (timed_out | clip_end) & ~failed
-        reward = reward + self.rewards.penalize(failed)
+        t2 = time.perf_counter()
+        # rewards come after terminations, so a term paid on failure is an ordinary term
+        ctx = replace(ctx, terminated=failed)
+        self.last_context = ctx  # the step's state before any reset (evaluation reads it)
+        reward = self.rewards.compute(ctx, valid=~bad)
         reward = torch.where(bad, torch.zeros_like(reward), torch.nan_to_num(reward))
+        t3 = time.perf_counter()
         self.episode_return += reward
         t4 = time.perf_counter()
         done = failed | timed_out
@@ -318,8 +301,8 @@ class RetargetEnv:
         obs = self.observe(ctx)
         t6 = time.perf_counter()
         sec["reference"] += t1 - t0
-        sec["rewards"] += t2 - t1
-        sec["terminations"] += t3 - t2
+        sec["terminations"] += t2 - t1
+        sec["rewards"] += t3 - t2
         sec["observations"] += t6 - t5
         sec["resets"] += t5 - t4
         sec["rewards"] += t4 - t3  # failure penalties
@@ -370,3 +353,13 @@ def random_actions(
 ) -> torch.Tensor:
     """Uniform actions in ``[-scale, scale]`` for every environment (benchmarks, smoke tests)."""
     return (torch.rand(env.num_envs, env.action_dim, generator=generator) * 2 - 1) * scale
+
+
+def _check_needs(plugin: StepPlugin) -> None:
+    offsets = plugin.needs().reference_offsets
+    bad = [k for k in offsets if not isinstance(k, int) or isinstance(k, bool) or k < 1]
+    if bad:
+        raise PluginError(
+            f"needs() asks for reference offsets {bad}; offsets are ints >= 1 (frames ahead)",
+            plugin=f"{plugin.kind} {plugin.name}",
+        )

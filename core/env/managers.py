@@ -12,21 +12,16 @@ from retarget.kinds.state import StepContext
 
 
 class RewardManager:
-    """``sum_i w_i * term_i(ctx)``; zero-weight terms are skipped; sums kept per episode.
-
-    Terms marked ``on_failure`` (the fail penalty) are applied through their ``penalty(failed)``
-    once the step's failures are known.
-    """
+    """``sum_i w_i * term_i(ctx)``; zero-weight terms are skipped; sums kept per episode."""
 
     def __init__(self, terms: Mapping[str, RewardTerm], num_envs: int) -> None:
         self.terms = {k: t for k, t in terms.items() if t.config.weight != 0.0}
         self.names = list(self.terms)
         self.weights = torch.tensor([t.config.weight for t in self.terms.values()])
         self.episode_sums = torch.zeros(num_envs, len(self.terms))
-        self._step_values = torch.zeros(num_envs, len(self.terms))
 
     def compute(self, ctx: StepContext, valid: torch.Tensor | None = None) -> torch.Tensor:
-        """Weighted reward of the step without failure penalties (added by :meth:`penalize`).
+        """Weighted reward of the step, added into the per-term episode sums.
 
         Every term must return ``(N,)`` floats, finite wherever ``valid`` (environments whose
         physics did not blow up); anything else is a :class:`PluginError` naming the term.
@@ -60,19 +55,9 @@ class RewardManager:
                     plugin=f"reward {self.terms[self.names[i]].name}",
                     field=f"rewards.{self.names[i]}",
                 )
-        self._step_values = values * self.weights
-        return self._step_values.sum(dim=1)
-
-    def penalize(self, failed: torch.Tensor) -> torch.Tensor:
-        """Failure penalties of the step (N,), added into the per-term sums too."""
-        extra = torch.zeros(failed.shape[0])
-        for i, term in enumerate(self.terms.values()):
-            if term.on_failure:
-                value = term.config.weight * term.penalty(failed)
-                self._step_values[:, i] += value
-                extra += value
-        self.episode_sums += self._step_values
-        return extra
+        weighted = values * self.weights
+        self.episode_sums += weighted
+        return weighted.sum(dim=1)
 
     def pop_episodes(self, env_ids: torch.Tensor) -> dict[str, float]:
         """Mean per-term episode sums of the finished ``env_ids``, then zero them."""

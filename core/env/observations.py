@@ -8,13 +8,13 @@ and a few frames ahead, which a headset user can never provide.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import torch
 
 from retarget.geometry.heading import heading_cos_sin, quat_to_6d, unyaw
 from retarget.kinds.state import Layout, StepContext
-
-FUTURE_POS = "future_body_pos"
-"""``ctx.ref.extras`` key: reference body positions at the privileged offsets ``(N, F, B, 3)``."""
+from retarget.kinds.step import StepNeeds
 
 
 def proprio_size(layout: Layout) -> int:
@@ -61,15 +61,54 @@ def privileged_size(layout: Layout, frames: int) -> int:
     return 3 + (layout.nq - 7) + frames * layout.num_bodies * 3
 
 
-def privileged(ctx: StepContext) -> torch.Tensor:
-    """Reference root offset and joint angles now, and reference body positions at future
-    frames, all relative to the simulated root in its heading frame."""
+def privileged(ctx: StepContext, offsets: tuple[int, ...]) -> torch.Tensor:
+    """Reference root offset and joint angles now, and reference body positions at the future
+    frames ``offsets``, all relative to the simulated root in its heading frame."""
     s, ref = ctx.sim, ctx.ref.pose
     root_pos, root_quat = s.qpos[:, :3], s.qpos[:, 3:7]
     n = ctx.num_envs
     c, sn = heading_cos_sin(root_quat)
     root_offset = unyaw((ref.qpos[:, :3] - root_pos)[:, None], c, sn)[:, 0]
-    future = unyaw(ctx.ref.extras[FUTURE_POS] - root_pos[:, None, None], c, sn)
+    ahead = torch.stack([ctx.ref.future[k].body_pos for k in offsets], dim=1)  # (N, F, B, 3)
+    future = unyaw(ahead - root_pos[:, None, None], c, sn)
     return torch.cat(
         [root_offset, ref.qpos[:, 7:] - s.qpos[:, 7:], future.reshape(n, -1)], dim=-1
     ).float()
+
+
+@dataclass
+class Proprio:
+    """Observation source ``proprio`` (:func:`proprio`)."""
+
+    layout: Layout
+    name: str = "proprio"
+
+    @property
+    def size(self) -> int:
+        return proprio_size(self.layout)
+
+    def needs(self) -> StepNeeds:
+        return StepNeeds()
+
+    def compute(self, ctx: StepContext) -> torch.Tensor:
+        return proprio(ctx)
+
+
+@dataclass
+class Privileged:
+    """Observation source ``privileged`` (:func:`privileged`): the critic's view of the
+    reference, asking the step for the reference at ``offsets`` frames ahead."""
+
+    layout: Layout
+    offsets: tuple[int, ...]
+    name: str = "privileged"
+
+    @property
+    def size(self) -> int:
+        return privileged_size(self.layout, len(self.offsets))
+
+    def needs(self) -> StepNeeds:
+        return StepNeeds(reference_offsets=self.offsets)
+
+    def compute(self, ctx: StepContext) -> torch.Tensor:
+        return privileged(ctx, self.offsets)

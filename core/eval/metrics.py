@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import torch
 
 from retarget.geometry.heading import rotation_distance
-from retarget.kinds.state import SCENE_CONTACTS, Layout, StepContext
+from retarget.kinds.state import Layout, StepContext
 from retarget.scene.contacts import CONTACT_LINKS
 from retarget.scene.contacts import CONTACT_NEWTONS as LINK_NEWTONS
 
@@ -113,7 +113,7 @@ class MetricProbe:
         speed = s.body_linvel[:, self.feet, :2].norm(dim=-1) * ctx.dt
         skate = (speed * feet_down).sum(-1) / feet_down.sum(-1).clamp_min(1)
         out = StepMetrics(hmd, hmd_rot, ctrl.mean(-1), device_mean, head_gap, agree, skate)
-        labels = ctx.ref.extras.get(SCENE_CONTACTS)
+        labels = ctx.ref.scene_contacts
         if labels is not None and self.link_columns.numel():
             up = s.contact_force_up[:, self.link_bodies] @ self.link_member
             sim_links = up > LINK_NEWTONS

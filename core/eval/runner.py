@@ -24,7 +24,7 @@ from retarget.env import RetargetEnv
 from retarget.eval.metrics import MetricProbe
 from retarget.eval.standard import standard_terms
 from retarget.eval.terms import EvalBatch, EvalStep, MetricTerm, summarise
-from retarget.kinds import Termination
+from retarget.kinds import StepNeeds, Termination
 
 Policy = Callable[[Mapping[str, torch.Tensor]], torch.Tensor]
 
@@ -58,6 +58,7 @@ def evaluate(
     """Metrics per clip and overall (JSON-ready dict); ``fall`` (a bound termination) counts
     falls per minute; ``terms`` are metrics reported after the standard ones."""
     cfg = settings or EvalSettings()
+    env.gather(StepNeeds(scene_contacts=True))  # the scene contact agreement reads them
     probe = MetricProbe(env.layout)
     has_joints = probe.joints is not None
     every = [

@@ -10,6 +10,7 @@ from retarget.kinds.motion_format import MotionFormat
 from retarget.kinds.reward import RewardConfig, RewardTerm, gaussian_kernel
 from retarget.kinds.scene import Scene
 from retarget.kinds.sensor import Observer, ObsSpec, Sensor
+from retarget.kinds.step import StepNeeds, StepPlugin
 from retarget.kinds.termination import Termination
 
 KINDS: dict[str, type[Plugin]] = {
@@ -41,6 +42,8 @@ __all__ = [
     "RewardTerm",
     "Scene",
     "Sensor",
+    "StepNeeds",
+    "StepPlugin",
     "Termination",
     "VecEnv",
     "gaussian_kernel",

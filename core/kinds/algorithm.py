@@ -12,6 +12,8 @@ from retarget.kinds.base import Plugin
 if TYPE_CHECKING:
     import torch
 
+    from retarget.registry import Registry
+
 
 @runtime_checkable
 class VecEnv(Protocol):
@@ -58,7 +60,7 @@ class Algorithm(Plugin):
     @abstractmethod
     def load_state_dict(self, state: Mapping[str, Any]) -> None: ...
 
-    def prepare_recipe(self, recipe: dict[str, Any], registry: Any) -> dict[str, Any]:
+    def prepare_recipe(self, recipe: dict[str, Any], registry: Registry) -> dict[str, Any]:
         """Amend a new run's recipe before it is resolved and locked: ``recipe`` is the
         resolved recipe as a plain dict (``ResolvedRecipe.to_dict``); return it, changed or
         not. A distillation algorithm adds the sensors and the observation group its teacher
@@ -69,7 +71,7 @@ class Algorithm(Plugin):
         """
         return recipe
 
-    def connect(self, registry: Any) -> None:
+    def connect(self, registry: Registry) -> None:
         """Receive the invocation's plugin registry (``retarget.registry.Registry``) before
         :meth:`setup`, for an algorithm that loads other runs (a teacher). Default: unused."""
 

@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import argparse
 from abc import abstractmethod
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from retarget.kinds.base import Plugin
+
+if TYPE_CHECKING:
+    from retarget.registry import Registry
 
 
 class Command(Plugin):
@@ -20,6 +23,11 @@ class Command(Plugin):
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
         """Declare this command's arguments on its own subparser."""
+
+    def connect(self, registry: Registry) -> None:
+        """Receive the invocation's plugin registry before :meth:`run` (kept as
+        ``self.registry``), so a command resolves recipes against the same plugins."""
+        self.registry = registry
 
     @abstractmethod
     def run(self, args: argparse.Namespace) -> int: ...

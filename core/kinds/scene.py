@@ -54,6 +54,23 @@ class Scene(Plugin):
         """
         ...
 
+    def local_surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray | None:
+        """``count`` samples in the props' own frames ``(count, 4)`` (prop index, x, y, z), for
+        scenes whose props move between episodes: an observer draws them once and places them
+        with :meth:`place_surface_points` after every reset, instead of sampling anew. None
+        (the default): the scene has no such frames; :meth:`surface_points` is used."""
+        return None
+
+    def place_surface_points(
+        self, local: torch.Tensor, dtype: torch.dtype | None = None
+    ) -> torch.Tensor:
+        """Place :meth:`local_surface_points` samples for every held environment
+        ``(N, count, 3)``; needed only by scenes whose ``local_surface_points`` returns
+        samples."""
+        raise NotImplementedError(
+            f"scene {self.name} returned local surface points but does not place them"
+        )
+
     def fit_motion(self, clips: Sequence[MotionClip]) -> None:
         """Adapt the scene to the run's motion clips before it is built (most scenes ignore
         this; ``motion_props`` places seats and boxes where the motions need them)."""

@@ -6,7 +6,7 @@ from abc import abstractmethod
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
-from retarget.kinds.base import Plugin
+from retarget.kinds.step import StepPlugin
 
 if TYPE_CHECKING:
     import torch
@@ -38,7 +38,7 @@ class ObsSpec:
         return n
 
 
-class Sensor(Plugin):
+class Sensor(StepPlugin):
     """Base class of sensors: batched device signals in the character's heading frame.
 
     ``bind`` resolves names to indices once; ``observe`` returns ``(N, *spec.shape)`` for the
@@ -47,17 +47,11 @@ class Sensor(Plugin):
 
     kind: ClassVar[str] = "sensor"
 
-    def bind(self, layout: Layout) -> None:
-        """Resolve site/body names to indices; called once before the first step."""
-
     @abstractmethod
     def spec(self, layout: Layout) -> ObsSpec: ...
 
     @abstractmethod
     def observe(self, ctx: StepContext) -> torch.Tensor: ...
-
-    def reset(self, env_ids: torch.Tensor) -> None:
-        """Forget per-environment state of ``env_ids`` (stateless sensors ignore this)."""
 
     def frames_needed(self) -> tuple[int, int]:
         """(past, future) reference frames this sensor reads from ``ctx.ref.devices``.
@@ -65,15 +59,6 @@ class Sensor(Plugin):
         The environment gathers the union of all sensors' windows once per step.
         """
         return (0, 0)
-
-    def reference_offsets(self) -> tuple[int, ...]:
-        """Frame offsets ``k >= 1`` at which this sensor reads the full reference state
-        (``ctx.ref.future[k]``): a teacher's target body, which no headset can provide.
-
-        The environment computes the union over all sensors once per step; the default asks
-        for none.
-        """
-        return ()
 
 
 class Observer(Sensor):

@@ -68,12 +68,6 @@ class Layout:
             raise KeyError(f"no body group '{name}'; known: {known}") from None
 
 
-SCENE_CONTACTS = "scene_contacts"
-"""``ReferenceBatch.extras`` key of the reference's scene contact labels ``(N, G)`` bool: whether
-the kinematic reference touches the scene (floor included) with each body group, one column per
-group of ``Layout.body_groups`` in its order (computed once per library frame, not per step)."""
-
-
 def _select(obj: object, idx: torch.Tensor) -> object:
     """Rows ``idx`` of every tensor field of a frozen dataclass (other fields kept)."""
     import torch
@@ -123,20 +117,22 @@ class ReferenceBatch:
     ``devices`` the synthesised device poses over the sensor time window
     ``(N, W, D, 7)`` (D devices: headset, left, right; position + wxyz quaternion), with
     ``window_offsets`` the frame offsets of the W entries (0 is now). ``contacts`` are the
-    reference contact labels of the character's ``contact`` body group. ``extras`` holds
-    privileged data (full human pose, future frames) and the scene contact labels
-    (``SCENE_CONTACTS``: ``(N, G)`` bool, one column per body group of the layout, in
-    ``layout.body_groups`` order) keyed by name.
+    reference contact labels of the character's ``contact`` body group. What only some
+    plugins read is gathered when one of them :meth:`~retarget.kinds.step.StepPlugin.needs`
+    it: ``future`` and ``scene_contacts``.
     """
 
     pose: SimState
     devices: torch.Tensor  # (N, W, D, 7)
     window_offsets: tuple[int, ...]
     contacts: torch.Tensor  # (N, C) bool
-    extras: Mapping[str, torch.Tensor] = field(default_factory=dict)
     future: Mapping[int, SimState] = field(default_factory=dict)
-    """The reference state ``k`` frames ahead, for each offset ``k`` a sensor asked for with
-    :meth:`~retarget.kinds.Sensor.reference_offsets` (clamped at the clip's last frame)."""
+    """The reference state ``k`` frames ahead, for each offset ``k`` some plugin asked for in
+    ``needs().reference_offsets`` (clamped at the clip's last frame)."""
+    scene_contacts: torch.Tensor | None = None
+    """``(N, G)`` bool when some plugin needs it: whether the kinematic reference touches the
+    scene (floor included) with each body group, one column per group of
+    ``Layout.body_groups`` in its order (computed once per library frame, not per step)."""
 
     def select(self, idx: torch.Tensor) -> ReferenceBatch:
         return replace(
@@ -145,7 +141,7 @@ class ReferenceBatch:
             future={k: v.select(idx) for k, v in self.future.items()},
             devices=self.devices[idx],
             contacts=self.contacts[idx],
-            extras={k: v[idx] for k, v in self.extras.items()},
+            scene_contacts=None if self.scene_contacts is None else self.scene_contacts[idx],
         )
 
 
@@ -161,6 +157,9 @@ class StepContext:
     episode_step: torch.Tensor  # (N,) int64
     dt: float
     scene: Scene | None = None  # the Scene plugin, for observers' batched geometry queries
+    terminated: torch.Tensor | None = None
+    """``(N,)`` bool: environments whose episode failed this step (time-outs excluded). Set
+    for rewards, which run after terminations; None for terminations and observations."""
 
     @property
     def num_envs(self) -> int:
@@ -177,4 +176,5 @@ class StepContext:
             action=self.action[idx],
             prev_action=self.prev_action[idx],
             episode_step=self.episode_step[idx],
+            terminated=None if self.terminated is None else self.terminated[idx],
         )

@@ -5,29 +5,24 @@ from __future__ import annotations
 from abc import abstractmethod
 from typing import TYPE_CHECKING, ClassVar
 
-from retarget.kinds.base import Plugin
+from retarget.kinds.step import StepPlugin
 
 if TYPE_CHECKING:
     import torch
 
-    from retarget.kinds.state import Layout, StepContext
+    from retarget.kinds.state import StepContext
 
 
-class Termination(Plugin):
+class Termination(StepPlugin):
     """Base class of terminations.
 
-    ``check`` returns a bool ``(N,)`` tensor. ``time_out`` terms (episode caps) are truncations:
-    PPO bootstraps their value instead of treating them as failures.
+    ``check`` returns a bool ``(N,)`` tensor; terminations run before rewards each step.
+    ``time_out`` terms (episode caps) are truncations: PPO bootstraps their value instead of
+    treating them as failures.
     """
 
     kind: ClassVar[str] = "termination"
     time_out: ClassVar[bool] = False
 
-    def bind(self, layout: Layout) -> None:
-        """Resolve names to indices once."""
-
     @abstractmethod
     def check(self, ctx: StepContext) -> torch.Tensor: ...
-
-    def reset(self, env_ids: torch.Tensor) -> None:
-        """Forget per-environment state of ``env_ids``."""

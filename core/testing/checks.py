@@ -26,6 +26,7 @@ from pydantic import ValidationError
 from retarget.errors import MotionError
 from retarget.kinds import KINDS, Plugin, PluginConfig
 from retarget.kinds.base import NAME_RE
+from retarget.kinds.step import StepNeeds
 from retarget.motion.clip import MotionClip
 from retarget.motion.skeleton import NUM_JOINTS
 from retarget.registry import hookspecs
@@ -191,11 +192,9 @@ def check_batched_shapes(plugin: object) -> None:
 
 
 def _future(plugin: object) -> tuple[int, ...]:
-    """Frames ahead a sensor or observer reads ``ctx.ref.future`` at (none for other kinds)."""
+    """Frames ahead the plugin reads ``ctx.ref.future`` at (its ``needs()``), else 1-3."""
     inst = make(plugin)
-    if not isinstance(inst, KINDS["sensor"]):
-        return (1, 2, 3)
-    return tuple(inst.reference_offsets()) or (1, 2, 3)
+    return tuple(inst.needs().reference_offsets) or (1, 2, 3)
 
 
 def check_finite(plugin: object) -> None:
@@ -336,6 +335,21 @@ def check_scene_queries(plugin: object) -> None:
         f"surface_points before allocate() must be (1, count, 3), got {pts.shape}"
     )
     scene.randomize(torch.tensor([0, 2]), torch.Generator().manual_seed(0))
+    local = scene.local_surface_points(32, np.random.default_rng(0))
+    if local is not None:  # prop-frame samples: (count, 4), placed as (N, count, 3)
+        assert local.shape == (32, 4), f"local_surface_points shape {local.shape} != (32, 4)"
+        placed = scene.place_surface_points(torch.from_numpy(local).float(), torch.float32)
+        assert tuple(placed.shape[1:]) == (32, 3) and torch.isfinite(placed).all(), (
+            f"place_surface_points must give finite (N, 32, 3), got {tuple(placed.shape)}"
+        )
+
+
+def check_needs(plugin: object) -> None:
+    """``needs()`` is a :class:`~retarget.kinds.step.StepNeeds` with offsets ``>= 1``."""
+    need = make(plugin).needs()
+    assert isinstance(need, StepNeeds), f"needs() returned {type(need).__name__}, not StepNeeds"
+    bad = [k for k in need.reference_offsets if not isinstance(k, int) or k < 1]
+    assert not bad, f"needs() asks for reference offsets {bad}; frames ahead are ints >= 1"
 
 
 def check_scene_placement(plugin: object) -> None:
@@ -481,6 +495,7 @@ COMMON: tuple[Check, ...] = (
     check_uses_toolkit,
 )
 STEP: tuple[Check, ...] = (
+    check_needs,
     check_batched_shapes,
     check_finite,
     check_batch_invariance,

@@ -15,7 +15,7 @@ import numpy as np
 import torch
 
 from retarget.kinds import Character, Scene
-from retarget.kinds.state import SCENE_CONTACTS, Layout, ReferenceBatch, SimState, StepContext
+from retarget.kinds.state import Layout, ReferenceBatch, SimState, StepContext
 from retarget.scene.floor import add_floor
 from retarget.sim.world import World, build_world
 
@@ -207,8 +207,8 @@ def fake_context(
         devices=devices,
         window_offsets=window_offsets,
         contacts=torch.rand(num_envs, feet, generator=g) > 0.5,
-        extras={SCENE_CONTACTS: torch.rand(num_envs, len(layout.body_groups), generator=g) > 0.5},
         future={k: _fake_state(layout, num_envs, g) for k in sorted(set(future_offsets))},
+        scene_contacts=torch.rand(num_envs, len(layout.body_groups), generator=g) > 0.5,
     )
     return StepContext(
         layout=layout,
@@ -217,6 +217,7 @@ def fake_context(
         action=torch.rand(num_envs, layout.nu, generator=g) * 2 - 1,
         prev_action=torch.rand(num_envs, layout.nu, generator=g) * 2 - 1,
         episode_step=torch.randint(0, 400, (num_envs,), generator=g),
+        terminated=torch.rand(num_envs, generator=g) > 0.7,
         dt=dt,
         scene=scene if scene is not None else FlatScene(),
     )

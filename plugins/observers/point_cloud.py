@@ -81,6 +81,7 @@ class PointCloud(Observer):
         self._scene: object = None
         self._order: torch.Tensor | None = None  # (pool,) Z-order of the first placement
         self._local: torch.Tensor | None = None  # prop-frame samples of a prop scene
+        self._global = False  # the scene gives world samples only (no prop frames)
         self._dirty: torch.Tensor | None = None
         self._any_dirty = False
 
@@ -98,9 +99,12 @@ class PointCloud(Observer):
         import torch
         rng = np.random.default_rng(self.config.seed)
         presorted = False
-        if hasattr(scene, "place_surface_points"):  # prop scenes: draw once, place per reset
-            if self._local is None:
-                self._local = torch.from_numpy(scene.local_surface_points(self.config.pool, rng))
+        if self._local is None and not self._global:
+            drawn = scene.local_surface_points(self.config.pool, rng)
+            self._global = drawn is None
+            if drawn is not None:
+                self._local = torch.from_numpy(drawn)
+        if self._local is not None:  # prop scenes: draw once, place per reset
             local = self._local
             if self._order is not None:  # place the samples in Z-order directly
                 local, presorted = self._local[self._order], True
@@ -137,6 +141,7 @@ class PointCloud(Observer):
         n = ctx.num_envs
         if self._pool is None or self._scene is not ctx.scene or self._pool.shape[0] != n:
             self._order = self._local = None
+            self._global = False
             self._pool, self._rank, self._lo, self._hi = self._chunked(*self._sample(ctx.scene, n))
             self._scene = ctx.scene
             self._dirty = torch.zeros(n, dtype=torch.bool)

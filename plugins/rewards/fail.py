@@ -1,15 +1,12 @@
 """The fail penalty of App. A: a constant reward (-5) on the step an episode fails.
 
-Failure is decided by the termination manager *after* rewards are computed from the step
-context, so no term can see it in ``compute``. This term therefore contributes nothing there
-(``compute`` returns zeros) and is marked ``on_failure = True``: the reward manager adds
-``weight * penalty(failed)`` for the environments whose episode ended by a failure this step
-(terminations that are not time-outs; an episode cap never triggers it).
+Terminations are checked before rewards, and the step context says which environments failed
+(``ctx.terminated``: failures only; time-outs such as an episode cap never trigger it).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING
 
 from pydantic import Field
 
@@ -27,22 +24,18 @@ class FailPenaltyConfig(RewardConfig):
 class FailPenalty(RewardTerm):
     """Adds ``value`` (-5 for every character in Table 2) on the step an episode fails.
 
-    Applied by the reward manager on failed environments through ``penalty(failed)``;
-    ``compute`` is zero because failure is not known when terms are computed.
+    ``value`` where ``ctx.terminated`` (the step's failures), else 0.
     """
 
     name = "fail_penalty"
     Config = FailPenaltyConfig
-    on_failure: ClassVar[bool] = True
-    """Tells the reward manager to call :meth:`penalty` with the failure mask of the step."""
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
         import torch
-        return torch.zeros(ctx.num_envs, dtype=torch.float32)
 
-    def penalty(self, failed: torch.Tensor) -> torch.Tensor:
-        """Unweighted ``(N,)`` penalty: ``value`` where ``failed`` (bool (N,)), else 0."""
-        return failed.float() * self.config.value
+        if ctx.terminated is None:  # outside a step (nothing has failed yet)
+            return torch.zeros(ctx.num_envs, dtype=torch.float32)
+        return ctx.terminated.float() * self.config.value
 
 
 @retarget.hookimpl

@@ -5,7 +5,7 @@ default the body groups ``left_foot``, ``right_foot``, ``left_hand``, ``right_ha
 ``pelvis`` and ``spine`` (the paper's feet, hands, root and spine). The norm is the paper's
 Euclidean norm (not squared), so for 0/1 vectors ``d = sqrt(#mismatches)``.
 
-``c_ref`` are the reference's scene contact labels (``ref.extras[SCENE_CONTACTS]``): collision
+``c_ref`` are the reference's scene contact labels (``ctx.ref.scene_contacts``): collision
 checks of the kinematic reference against the un-randomized scene, computed once per library
 frame (:mod:`retarget.scene.contacts`). ``c_sim``: a group is in contact when the contact
 force on its bodies (summed: a foot split into heel and toes is one link) exceeds
@@ -24,8 +24,15 @@ from typing import TYPE_CHECKING, Literal
 from pydantic import Field
 
 import retarget
-from retarget import Layout, PluginError, RewardConfig, RewardTerm, StepContext, gaussian_kernel
-from retarget.kinds.state import SCENE_CONTACTS
+from retarget import (
+    Layout,
+    PluginError,
+    RewardConfig,
+    RewardTerm,
+    StepContext,
+    StepNeeds,
+    gaussian_kernel,
+)
 from retarget.scene.contacts import CONTACT_LINKS as LINKS
 from retarget.scene.contacts import CONTACT_NEWTONS
 
@@ -74,6 +81,9 @@ class SceneContact(RewardTerm):
         self._member = member
         self._columns = torch.tensor([groups.index(g) for g in self.config.groups])
 
+    def needs(self) -> StepNeeds:
+        return StepNeeds(scene_contacts=True)
+
     def sim_contacts(self, ctx: StepContext) -> torch.Tensor:
         """``(N, G)`` bool: each configured group's contact state in the simulation."""
         sim = ctx.sim
@@ -81,11 +91,12 @@ class SceneContact(RewardTerm):
         return force[:, self._bodies] @ self._member > self.config.force_threshold
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
-        labels = ctx.ref.extras.get(SCENE_CONTACTS)
+        labels = ctx.ref.scene_contacts
         if labels is None:
             raise PluginError(
-                f"the reference has no scene contact labels (ref.extras['{SCENE_CONTACTS}'])",
+                "the step context has no scene contact labels (ctx.ref.scene_contacts)",
                 plugin=self.name,
+                hint="the environment gathers them for terms whose needs() asks",
             )
         ref = labels[:, self._columns]
         mismatches = (self.sim_contacts(ctx) != ref).float().sum(-1)

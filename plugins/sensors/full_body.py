@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING
 from pydantic import Field, field_validator
 
 import retarget
-from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
+from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext, StepNeeds
 
 if TYPE_CHECKING:
     import torch
@@ -55,8 +55,8 @@ class FullBody(Sensor):
     name = "full_body"
     Config = FullBodyConfig
 
-    def reference_offsets(self) -> tuple[int, ...]:
-        return tuple(self.config.offsets)
+    def needs(self) -> StepNeeds:
+        return StepNeeds(reference_offsets=tuple(self.config.offsets))
 
     def _per_body(self) -> int:
         return 6 + 3 + (6 if self.config.velocities else 0) + 6 + 3
@@ -90,7 +90,7 @@ class FullBody(Sensor):
                     f"the step context has no reference {k} frames ahead "
                     f"(has {sorted(ctx.ref.future)})",
                     plugin=self.name,
-                    hint="the environment gathers the offsets reference_offsets() returns",
+                    hint="the environment gathers the offsets needs() names",
                 )
             diff_rot = quat_to_6d(quat_mul(quat_conj(s.body_quat), ref.body_quat))
             ref_rot = quat_to_6d(to_heading_quats(ref.body_quat, root_quat))
@@ -137,8 +137,8 @@ class ReferenceAction(Sensor):
             -1, 1
         )
 
-    def reference_offsets(self) -> tuple[int, ...]:
-        return (self.config.offset,)
+    def needs(self) -> StepNeeds:
+        return StepNeeds(reference_offsets=(self.config.offset,))
 
     def spec(self, layout: Layout) -> ObsSpec:
         return ObsSpec((layout.nu,))

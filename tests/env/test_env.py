@@ -11,7 +11,6 @@ import torch
 
 from retarget.env import EnvOptions, RetargetEnv, random_actions
 from retarget.env.build import env_from_recipe
-from retarget.env.observations import privileged, proprio
 from retarget.errors import RecipeError
 from retarget.geometry.heading import quat_mul, yaw_quat
 from retarget.kinds.state import SimState
@@ -132,14 +131,13 @@ def test_observations_are_heading_invariant(human: RetargetEnv) -> None:
             ctx.ref,
             pose=_rotated(ctx.ref.pose, angle, shift),
             devices=dev,
-            extras={
-                k: v @ rot.T + shift if v.is_floating_point() else v  # labels stay
-                for k, v in ctx.ref.extras.items()
-            },
+            future={k: _rotated(v, angle, shift) for k, v in ctx.ref.future.items()},
         ),
     )
-    for fn in (proprio, privileged, human.sensors[0].observe):
-        torch.testing.assert_close(fn(turned), fn(ctx), atol=2e-4, rtol=1e-4)
+    sources = human.observations.sources
+    for name in ("proprio", "privileged", human.sensors[0].name):
+        compute = sources[name].compute
+        torch.testing.assert_close(compute(turned), compute(ctx), atol=2e-4, rtol=1e-4)
 
 
 def test_reset_puts_the_character_on_the_reference(human: RetargetEnv) -> None:

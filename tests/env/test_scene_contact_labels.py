@@ -1,14 +1,15 @@
 """Reference scene contact labels: MuJoCo collision checks of the kinematic reference against
-the scene, once per library frame, exposed to every step as ``ref.extras[SCENE_CONTACTS]``."""
+the scene, once per library frame, exposed to every step as ``ctx.ref.scene_contacts``
+(when a plugin needs them)."""
 
 from __future__ import annotations
 
 import numpy as np
 import torch
 
+from retarget import StepNeeds
 from retarget.env import EnvOptions, RetargetEnv
 from retarget.env.reference import CharacterReference
-from retarget.kinds.state import SCENE_CONTACTS
 from retarget.motion.procedural import default_motions
 from retarget.motion.resample import resample
 from retarget.plugins.characters.human import Human
@@ -44,9 +45,11 @@ def test_a_stool_under_the_seated_pelvis_is_labelled_only_while_seated() -> None
 def test_env_exposes_labels_per_step_and_randomization_keeps_them() -> None:
     def env(randomize: dict | None) -> RetargetEnv:
         cfg = {"position": (-0.32, 0.0)} | ({"randomize": randomize} if randomize else {})
-        return RetargetEnv(
+        made = RetargetEnv(
             Human(), [SIT], scene=Stool(Stool.Config(**cfg)), options=EnvOptions(num_envs=3)
         )
+        made.gather(StepNeeds(scene_contacts=True))
+        return made
 
     plain, noisy = env(STILL), env(None)  # default: 8 cm / 0.1 rad placement noise
     assert torch.equal(plain.reference.scene_contacts, noisy.reference.scene_contacts)
@@ -54,6 +57,6 @@ def test_env_exposes_labels_per_step_and_randomization_keeps_them() -> None:
     noisy.place(torch.zeros(3, dtype=torch.long), frames)
     noisy.step(torch.zeros(3, noisy.action_dim))
     ctx = noisy.last_context
-    labels = ctx.ref.extras[SCENE_CONTACTS]
+    labels = ctx.ref.scene_contacts
     assert labels.shape == (3, len(noisy.layout.body_groups)) and labels.dtype == torch.bool
     assert torch.equal(labels, noisy.reference.scene_contacts[frames + 1])

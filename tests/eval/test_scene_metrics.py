@@ -13,7 +13,6 @@ from retarget.cli.eval_cmd import table
 from retarget.env import EnvOptions, RetargetEnv
 from retarget.eval import EvalSettings, evaluate
 from retarget.eval.metrics import MetricProbe
-from retarget.kinds.state import SCENE_CONTACTS
 from retarget.motion.procedural import default_motions
 from retarget.plugins.characters.human import Human
 from retarget.plugins.scenes.motion_props import MotionProps
@@ -67,7 +66,7 @@ def test_scene_contact_agreement_by_hand() -> None:
     ctx = replace(
         ctx,
         sim=replace(ctx.sim, contact_force_up=up),
-        ref=replace(ctx.ref, extras={SCENE_CONTACTS: labels}),
+        ref=replace(ctx.ref, scene_contacts=labels),
     )
     pen = (torch.tensor([0.02, 0.0]), torch.tensor([0.01, 0.0]))
     m = MetricProbe(layout)(ctx, pen)

@@ -152,10 +152,9 @@ def test_foot_contact_left_right_labels_over_several_foot_bodies() -> None:
 
 def test_fail_penalty_applies_on_failed_envs_only() -> None:
     term = FailPenalty()
-    assert FailPenalty.on_failure is True
-    assert torch.equal(_value(term, _ctx(3)), torch.zeros(3))
-    penalty = term.penalty(torch.tensor([True, False, True]))
-    torch.testing.assert_close(penalty, torch.tensor([-5.0, 0.0, -5.0]))
+    failed = replace(_ctx(3), terminated=torch.tensor([True, False, True]))
+    torch.testing.assert_close(_value(term, failed), torch.tensor([-5.0, 0.0, -5.0]))
+    assert torch.equal(_value(term, replace(failed, terminated=None)), torch.zeros(3))
 
 
 def test_action_terms_mean_squared_actions() -> None:

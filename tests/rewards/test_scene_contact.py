@@ -10,7 +10,6 @@ import torch
 
 from retarget import PluginError
 from retarget.env import EnvOptions, RetargetEnv
-from retarget.kinds.state import SCENE_CONTACTS
 from retarget.motion.procedural import default_motions
 from retarget.plugins.characters.human import Human
 from retarget.plugins.rewards.scene_contact import LINKS, SceneContact
@@ -39,7 +38,7 @@ def _ctx(up: dict[str, float], total: dict[str, float], labels: list[str], n: in
     for g in labels:
         lab[:, groups.index(g)] = True
     sim = replace(ctx.sim, contact_force_up=f_up, contact_force=f_all)
-    return replace(ctx, sim=sim, ref=replace(ctx.ref, extras={SCENE_CONTACTS: lab}))
+    return replace(ctx, sim=sim, ref=replace(ctx.ref, scene_contacts=lab))
 
 
 def _value(term: SceneContact, ctx) -> float:
@@ -79,7 +78,7 @@ def test_contact_reward_errors_name_the_plugin() -> None:
     term.bind(HUMAN)
     ctx = fake_context(HUMAN, 2, seed=0)
     with pytest.raises(PluginError, match="scene contact labels"):
-        term.compute(replace(ctx, ref=replace(ctx.ref, extras={})))
+        term.compute(replace(ctx, ref=replace(ctx.ref, scene_contacts=None)))
     assert set(LINKS) <= set(HUMAN.body_groups)
 
 
@@ -100,7 +99,7 @@ def test_contact_reward_on_real_contact_forces() -> None:
     state = term.sim_contacts(ctx)
     feet = [term.config.groups.index(g) for g in ("left_foot", "right_foot")]
     assert state[:, feet].all() and not state[:, 2:].any()
-    labels = ctx.ref.extras[SCENE_CONTACTS]
+    labels = ctx.ref.scene_contacts
     groups = list(env.layout.body_groups)
     assert labels[:, groups.index("left_foot")].all()
     assert not labels[:, groups.index("pelvis")].any()

@@ -1,0 +1,98 @@
+"""Observation groups made of named sources, each computed once per step.
+
+A *source* is anything that turns a :class:`StepContext` into ``(N, size)`` columns: the
+environment's own proprioception and privileged reference, and every sensor and observer. A
+*group* (``actor``, ``critic``, ``teacher``, ...) is a list of source names whose columns are
+concatenated in that order. Sources are resolved once at construction, so a step only calls
+them; what a source needs the step to gather is its ``needs()`` (only sources some group uses
+count), and the environment fills exactly that.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
+
+import torch
+
+from retarget.errors import RecipeError
+from retarget.kinds.step import StepNeeds
+
+if TYPE_CHECKING:
+    from retarget.kinds import Observer, Sensor
+    from retarget.kinds.state import Layout, StepContext
+
+
+class ObsSource(Protocol):
+    """One named block of observation columns."""
+
+    name: str
+    size: int
+
+    def needs(self) -> StepNeeds: ...
+
+    def compute(self, ctx: StepContext) -> torch.Tensor: ...
+
+
+@dataclass
+class PluginSource:
+    """A sensor or observer as a source: its ``observe``, its spec's size, its requirements."""
+
+    plugin: Sensor | Observer
+    name: str
+    size: int
+
+    @classmethod
+    def of(cls, plugin: Sensor | Observer, layout: Layout) -> PluginSource:
+        return cls(plugin, plugin.name, plugin.spec(layout).size)
+
+    def needs(self) -> StepNeeds:
+        return self.plugin.needs()
+
+    def compute(self, ctx: StepContext) -> torch.Tensor:
+        return self.plugin.observe(ctx)
+
+
+class ObservationManager:
+    """Groups of sources: validated names, column layouts, and one pass per step."""
+
+    def __init__(
+        self, sources: Sequence[ObsSource], groups: Mapping[str, Sequence[str]]
+    ) -> None:
+        self.sources = {s.name: s for s in sources}
+        self.groups = {g: list(names) for g, names in groups.items()}
+        for group, names in self.groups.items():
+            unknown = [s for s in names if s not in self.sources]
+            if unknown:
+                raise RecipeError(
+                    f"observation group '{group}' names unknown sources {unknown}",
+                    field=f"env.groups.{group}",
+                    hint=f"available: {', '.join(self.sources)}",
+                )
+        used = {name for names in self.groups.values() for name in names}
+        self.needs = StepNeeds()
+        for name in used:
+            self.needs = self.needs | self.sources[name].needs()
+
+    @property
+    def dims(self) -> dict[str, int]:
+        return {g: sum(self.sources[s].size for s in names) for g, names in self.groups.items()}
+
+    @property
+    def layout(self) -> dict[str, list[tuple[str, int]]]:
+        """Each group's sources in column order, ``(name, size)``."""
+        return {g: [(s, self.sources[s].size) for s in names] for g, names in self.groups.items()}
+
+    def compute(self, ctx: StepContext) -> dict[str, torch.Tensor]:
+        """Every group's ``(N, D)`` observation (non-finite values zeroed); each source once."""
+        cache: dict[str, torch.Tensor] = {}
+        out = {}
+        for group, names in self.groups.items():
+            parts = []
+            for name in names:
+                if name not in cache:
+                    cache[name] = self.sources[name].compute(ctx).reshape(ctx.num_envs, -1)
+                parts.append(cache[name])
+            out[group] = torch.nan_to_num(torch.cat(parts, dim=-1), 0.0, 0.0, 0.0)
+        return out
