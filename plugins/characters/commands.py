@@ -14,6 +14,7 @@ from typing import Any
 
 import retarget
 from retarget import Command, RetargetError
+from retarget.character.builder import geom_z_extent
 
 
 def _parse_sets(pairs: list[str]) -> dict[str, Any]:
@@ -108,7 +109,6 @@ def show(character: Any, out: Path, width: int = 960, height: int = 720) -> None
 def _extent(model: Any) -> tuple[float, float]:
     import mujoco
 
-    from retarget.character.builder import geom_z_extent
 
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)

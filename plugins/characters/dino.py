@@ -3,17 +3,25 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import Literal
 
 from pydantic import Field
 
 import retarget
+from retarget.character.builder import (
+    BodyBuilder,
+    Box,
+    Capsule,
+    Ellipsoid,
+    Joint,
+    Sphere,
+    ball,
+    hinge,
+    joint,
+)
 from retarget.character.joint_map import JointLink, JointMap, elbow_link
 
 from .common import CharacterConfig, ProceduralCharacter, scaled
-
-if TYPE_CHECKING:
-    from retarget.character.builder import BodyBuilder, Joint
 
 REFERENCE_HEIGHT = 2.5
 """Height the geometry below is written at; everything scales with ``height / 2.5``."""
@@ -76,16 +84,6 @@ class Dino(ProceduralCharacter):
         return 0.0 if joint.startswith("tail") else 1.0
 
     def describe(self) -> BodyBuilder:
-        from retarget.character.builder import (
-            BodyBuilder,
-            Box,
-            Capsule,
-            Ellipsoid,
-            Sphere,
-            ball,
-            hinge,
-            joint,
-        )
         cfg = self.config
         s = cfg.height / REFERENCE_HEIGHT
 
@@ -154,7 +152,6 @@ class Dino(ProceduralCharacter):
         return b
 
     def _tail_joint(self, i: int) -> Joint | None:
-        from retarget.character.builder import joint
         cfg = self.config
         limits = {"z": (-30.0, 30.0), "y": (-25.0, 25.0)}
         if i < cfg.tail_active or cfg.tail == "active":

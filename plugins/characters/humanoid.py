@@ -14,14 +14,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
+from retarget.character.builder import BodyBuilder, Box, Capsule, Joint, Sphere, ball, hinge, joint
 from retarget.character.joint_map import JointLink, JointMap, elbow_link
 
 from .common import scaled
-
-if TYPE_CHECKING:
-    from retarget.character.builder import BodyBuilder, Joint
 
 # Table 4 of the paper (torque scale per joint family; unlisted families are not scaled). The
 # paper's skeletons do not name wrists or toes; we scale them down (0.05 / 0.2) because a
@@ -57,7 +54,6 @@ def build_humanoid(name: str, height: float, torque: float, shape: HumanoidShape
     """Bodies, joints and role sites of a humanoid ``height`` metres tall (crown to floor)."""
     import numpy as np
 
-    from retarget.character.builder import BodyBuilder, Box, Capsule, Sphere, ball, hinge, joint
     from retarget.motion import skeleton as sk
     s = height / sk.REFERENCE_HEIGHT
     off = {n: tuple(o) for n, o in zip(sk.JOINT_NAMES, sk.rest_offsets(height), strict=True)}

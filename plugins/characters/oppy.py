@@ -3,17 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING
 
 from pydantic import Field
 
 import retarget
+from retarget.character.builder import BodyBuilder, Box, Capsule, Ellipsoid, Sphere, ball, joint
 from retarget.character.joint_map import JointLink, JointMap, elbow_link
 
 from .common import CharacterConfig, ProceduralCharacter, scaled
-
-if TYPE_CHECKING:
-    from retarget.character.builder import BodyBuilder
 
 REFERENCE_HEIGHT = 0.8
 """Height (floor to ear tips) the geometry below is written at; it scales with the config."""
@@ -55,15 +52,6 @@ class Oppy(ProceduralCharacter):
     lower_body_weight = 0.3
 
     def describe(self) -> BodyBuilder:
-        from retarget.character.builder import (
-            BodyBuilder,
-            Box,
-            Capsule,
-            Ellipsoid,
-            Sphere,
-            ball,
-            joint,
-        )
         cfg = self.config
         s = cfg.height / REFERENCE_HEIGHT
 
