@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -24,6 +25,8 @@ class Hello(retarget.Command):
         print(f"hello {args.who}")
         if args.who == "error":
             raise retarget.RecipeError("bad who", field="who")
+        if args.who == "bug":
+            raise ValueError("a bug in the plugin")
         return 0
 
 @retarget.hookimpl
@@ -144,3 +147,29 @@ def test_subcommand_help_shows_defaults(verb: str, capsys) -> None:
     text = capsys.readouterr().out
     if verb in {"train", "eval", "play"}:
         assert "(default: " in text
+
+
+def test_a_command_plugin_that_raises_is_named_with_its_distribution(make_dist, capsys) -> None:
+    make_dist("retarget-hello", {"hello": COMMAND})
+    assert main(["hello", "bug"]) == 2
+    err = capsys.readouterr().err
+    assert "plugin 'hello from retarget-hello'" in err and "ValueError: a bug in the plugin" in err
+    assert "Traceback" not in err and "unexpected failure" not in err
+    saved = err.split("traceback is in ")[1].split()[0]
+    assert "Traceback" in Path(saved).read_text(encoding="utf-8")
+
+
+def test_an_unexpected_failure_is_one_line_and_a_traceback_file(monkeypatch, capsys) -> None:
+    from retarget.cli import plugins_cmd
+
+    def broken(*_args):
+        raise ZeroDivisionError("deep inside")
+
+    monkeypatch.setattr(plugins_cmd, "run_list", broken)
+    monkeypatch.delenv("RETARGET_DEBUG", raising=False)
+    assert main(["plugins"]) == 1
+    err = capsys.readouterr().err
+    assert "unexpected failure of 'retarget plugins': ZeroDivisionError: deep inside" in err
+    assert "Traceback" not in err
+    saved = err.split("traceback is in ")[1].split()[0]
+    assert "ZeroDivisionError" in Path(saved).read_text(encoding="utf-8")

@@ -102,13 +102,42 @@ def test_broken_plugin_leaves_cli_working_and_strict_fails(make_dist, capsys, mo
     assert main(["plugins"]) == 2
 
 
-def test_duplicate_names_are_an_error_naming_both(make_dist) -> None:
+def test_duplicate_names_disable_both_with_a_warning_naming_both(make_dist, capsys) -> None:
     make_dist("retarget-dupe", {"dupe": DUPLICATE})
-    with pytest.raises(PluginError) as info:
-        load_plugins(strict=False)
-    text = info.value.format()
-    assert "duplicate reward name 'action_min'" in text
+    with pytest.warns(PluginLoadWarning) as caught:
+        registry = load_plugins(strict=False)
+    text = " ".join(str(w.message) for w in caught)
+    assert "duplicate reward name 'action_min'" in text and "neither is used" in text
     assert "retarget-dupe" in text and "retarget 0.1.0" in text
+    assert "action_min" not in registry.names("reward")
+    assert "action_diff" in registry.names("reward")  # everything else still loads
+    with pytest.raises(PluginError, match="duplicate reward name"):
+        load_plugins(strict=True)
+    assert main(["plugins"]) == 0  # the CLI still starts
+    assert "warning:" in capsys.readouterr().err
+
+
+def test_an_entry_point_name_taken_twice_loads_neither(make_dist) -> None:
+    make_dist("retarget-calm-a", {"calm": GOOD})
+    make_dist("retarget-calm-b", {"calm": GOOD})
+    with pytest.warns(PluginLoadWarning, match="neither is loaded"):
+        registry = load_plugins(strict=False)
+    assert "calm" not in registry.names("reward")
+
+
+EXITS = "import sys\nsys.exit(3)\n"
+BASE_EXCEPTION = "class Odd(BaseException):\n    pass\n\nraise Odd('from import')\n"
+
+
+def test_sys_exit_or_base_exception_at_import_is_a_broken_plugin(make_dist, capsys) -> None:
+    make_dist("retarget-exits", {"exits": EXITS, "odd": BASE_EXCEPTION})
+    with pytest.warns(PluginLoadWarning) as caught:
+        registry = load_plugins(strict=False)
+    text = " ".join(str(w.message) for w in caught)
+    assert "SystemExit: 3" in text and "Odd: from import" in text
+    assert "action_diff" in registry.names("reward")
+    assert main(["plugins"]) == 0
+    assert "action_diff" in capsys.readouterr().out
 
 
 def test_allowlist_limits_third_party_distributions(make_dist, monkeypatch) -> None:

@@ -10,13 +10,14 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import tempfile
 import traceback
 import warnings
 from collections.abc import Sequence
 
 import retarget
 from retarget.cli import eval_cmd, export_cmd, play_cmd, plugins_cmd, recipe_cmd, train_cmd
-from retarget.errors import RetargetError
+from retarget.errors import PluginError, RetargetError
 from retarget.kinds import Command
 from retarget.registry import Registry
 from retarget.registry.loader import PluginLoadWarning, load_plugins, strict_from_env
@@ -70,20 +71,33 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     export_cmd.add_parser(sub)
     for name in registry.names("command"):
         entry = registry.get("command", name)
-        _add_plugin_command(sub, entry.cls, entry.plugin)
+        _add_plugin_command(sub, entry.cls, entry.plugin, entry.distribution)
     return parser
 
 
-def _add_plugin_command(sub: argparse._SubParsersAction, cls: type[Command], plugin: str) -> None:
+def _add_plugin_command(
+    sub: argparse._SubParsersAction, cls: type[Command], plugin: str, dist: str
+) -> None:
     command = cls()
     parser = sub.add_parser(cls.name, help=cls.help or cls.summary(), description=cls.__doc__)
     command.add_arguments(parser)
 
     def handler(args: argparse.Namespace, registry: Registry) -> int:
         command.connect(registry)
-        return int(command.run(args) or 0)
+        try:
+            return int(command.run(args) or 0)
+        except (RetargetError, KeyboardInterrupt):
+            raise
+        except Exception as exc:  # the plugin's bug: name it, keep the traceback in a file
+            if os.environ.get("RETARGET_DEBUG"):
+                raise
+            raise PluginError(
+                f"command '{cls.name}' failed: {type(exc).__name__}: {exc}",
+                plugin=f"{plugin} from {dist}",
+                hint=f"the full traceback is in {_save_traceback()}",
+            ) from exc
 
-    parser.set_defaults(handler=handler, plugin_name=plugin)
+    parser.set_defaults(handler=handler, plugin_name=plugin, plugin_dist=dist)
 
 
 def _load(strict: bool) -> Registry:
@@ -97,6 +111,17 @@ def _load(strict: bool) -> Registry:
         else:
             warnings.showwarning(item.message, item.category, item.filename, item.lineno)
     return registry
+
+
+def _save_traceback() -> str:
+    """Write the exception being handled to a file and return its path: the terminal gets one
+    line, a bug report gets the whole story."""
+    fd, path = tempfile.mkstemp(prefix="retarget-traceback-", suffix=".txt")
+    with os.fdopen(fd, "w", encoding="utf-8") as fh:
+        fh.write(f"retarget {retarget.__version__}, python {sys.version.split()[0]}\n")
+        fh.write(f"argv: {sys.argv!r}\n\n")
+        traceback.print_exc(file=fh)
+    return path
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -121,13 +146,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         error("interrupted")
         return 130
-    except Exception:
-        plugin = getattr(locals().get("args"), "plugin_name", None)
-        where = f" in plugin '{plugin}'" if plugin else ""
-        error(f"unexpected failure{where}:")
-        traceback.print_exc()
+    except Exception as exc:
         if os.environ.get("RETARGET_DEBUG"):
             raise
+        args = locals().get("args")
+        plugin = getattr(args, "plugin_name", None)
+        where = f" in plugin '{plugin}' from {args.plugin_dist}" if plugin else ""
+        verb = " ".join(["retarget", *argv[:1]])
+        saved = _save_traceback()
+        error(
+            f"unexpected failure of '{verb}'{where}: {type(exc).__name__}: {exc}\n"
+            f"  the full traceback is in {saved} (RETARGET_DEBUG=1 raises it instead)"
+        )
         return 1
 
 

@@ -3,9 +3,10 @@
 A plugin that fails to import, registers something invalid or raises inside its hook produces
 one warning naming the plugin, its distribution and the error, and everything else keeps
 working. Strict mode (``--strict-plugins`` / ``RETARGET_STRICT_PLUGINS=1``, and always in the
-contract suite) turns those warnings into :class:`retarget.errors.PluginError`. Duplicate names
-are always errors. ``RETARGET_LOAD_PLUGINS=dist-a,dist-b`` restricts which third-party
-distributions load (retarget's own built-ins always load; an empty value loads none else).
+contract suite) turns those warnings into :class:`retarget.errors.PluginError`. Two plugins
+that claim one name are both left out, with a warning naming both.
+``RETARGET_LOAD_PLUGINS=dist-a,dist-b`` restricts which third-party distributions load
+(retarget's own built-ins always load; an empty value loads none else).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import pluggy
 
 from retarget.errors import PluginError
 from retarget.registry import hookspecs
-from retarget.registry.store import Entry, Registry
+from retarget.registry.store import DuplicateName, Entry, Registry
 
 GROUP = "retarget"
 OWN_DISTRIBUTION = "retarget"
@@ -77,7 +78,10 @@ def load_plugins(
     provenance: dict[str, tuple[str, str]] = {}
 
     def problem(plugin: str, dist: str, what: str, exc: BaseException) -> None:
-        detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
+        if isinstance(exc, PluginError):
+            detail = exc.message + (f" ({exc.hint})" if exc.hint else "")
+        else:
+            detail = "".join(traceback.format_exception_only(type(exc), exc)).strip()
         message = f"plugin '{plugin}' from {dist} {what}: {detail}"
         if strict:
             raise PluginError(f"{what}: {detail}", plugin=f"{plugin} ({dist})") from exc
@@ -94,20 +98,29 @@ def load_plugins(
                 continue
             try:
                 module = ep.load()
-            except Exception as exc:
+            except KeyboardInterrupt:
+                raise
+            except BaseException as exc:  # sys.exit() or worse at import is a broken plugin too
                 problem(ep.name, dist, "failed to import", exc)
                 continue
             candidates.append((ep.name, dist, version, module))
     for name, module in (modules or {}).items():
         candidates.append((name, "local", "0", module))
 
+    clashing: set[str] = set()
     for name, dist, version, module in candidates:
-        if pm.has_plugin(name):
-            other = provenance[name][0]
-            raise PluginError(
-                f"two plugins share the entry point name '{name}': {other} and {dist}",
-                plugin=name,
+        if pm.has_plugin(name) or name in clashing:
+            if pm.has_plugin(name):
+                other = provenance[name][0]
+                pm.unregister(name=name)
+            else:
+                other = "another distribution"
+            clashing.add(name)
+            problem(
+                name, dist, f"shares its entry point name with {other}; neither is loaded",
+                PluginError("rename one entry point, or uninstall one distribution"),
             )
+            continue
         try:
             pm.register(module, name=name)
         except Exception as exc:
@@ -149,13 +162,16 @@ def _call_hook(impl, kind, dist, version, registry, problem) -> None:
     kwargs = {"register": register} if "register" in impl.argnames else {}
     try:
         impl.function(**kwargs)
-    except Exception as exc:
+    except KeyboardInterrupt:
+        raise
+    except BaseException as exc:
         problem(impl.plugin_name, dist, f"raised in {kind} registration", exc)
         return
     for entry in staged:
         try:
             registry.add(entry)
+        except DuplicateName as exc:
+            registry.withdraw(exc.kind, exc.name)
+            problem(impl.plugin_name, dist, "registered a name another plugin has", exc)
         except PluginError as exc:
-            if "duplicate" in exc.message:
-                raise
             problem(impl.plugin_name, dist, "registered an invalid plugin", exc)

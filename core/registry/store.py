@@ -32,6 +32,14 @@ class Entry:
         return f"{self.distribution} {self.version} (entry point '{self.plugin}')"
 
 
+class DuplicateName(PluginError):
+    """Two plugins registered the same kind and name (or alias)."""
+
+    def __init__(self, message: str, *, kind: str, name: str, plugin: str, hint: str) -> None:
+        super().__init__(message, plugin=plugin, hint=hint)
+        self.kind, self.name = kind, name
+
+
 @dataclass
 class Registry:
     """All plugin classes known to one run, keyed by kind and name (aliases resolve too)."""
@@ -41,6 +49,8 @@ class Registry:
     )
     aliases: dict[str, dict[str, str]] = field(default_factory=lambda: {kind: {} for kind in KINDS})
     problems: list[str] = field(default_factory=list)
+    clashed: dict[str, set[str]] = field(default_factory=lambda: {kind: set() for kind in KINDS})
+    """Names two plugins both registered: neither is used (see :meth:`withdraw`)."""
 
     def add(self, entry: Entry) -> None:
         """Add ``entry``; a name or alias already taken is an error naming both providers."""
@@ -58,10 +68,13 @@ class Registry:
                     plugin=entry.plugin,
                 )
             other = self._lookup(entry.kind, label)
-            if other is not None:
-                raise PluginError(
-                    f"duplicate {entry.kind} name '{label}': provided by {other.provider} "
-                    f"and by {entry.provider}",
+            if other is not None or label in self.clashed[entry.kind]:
+                first = other.provider if other is not None else "another plugin"
+                raise DuplicateName(
+                    f"duplicate {entry.kind} name '{label}': provided by {first} "
+                    f"and by {entry.provider}; neither is used",
+                    kind=entry.kind,
+                    name=label,
                     plugin=entry.plugin,
                     hint="uninstall one of the two distributions, or restrict loading with "
                     "RETARGET_LOAD_PLUGINS",
@@ -69,6 +82,17 @@ class Registry:
         self.entries[entry.kind][entry.name] = entry
         for alias in entry.aliases:
             self.aliases[entry.kind][alias] = entry.name
+
+    def withdraw(self, kind: str, name: str) -> None:
+        """Remove ``name`` (and whatever it is an alias of) and refuse it from now on: when two
+        plugins claim one name, neither is used, rather than whichever loaded last."""
+        entry = self._lookup(kind, name)
+        self.clashed[kind].add(name)
+        if entry is None:
+            return
+        del self.entries[kind][entry.name]
+        for alias in entry.aliases:
+            self.aliases[kind].pop(alias, None)
 
     def _lookup(self, kind: str, name: str) -> Entry | None:
         table = self.entries[kind]
