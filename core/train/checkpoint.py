@@ -76,9 +76,33 @@ def load_checkpoint(path: str | Path) -> dict[str, Any]:
         ) from None
     except Exception as exc:
         raise RetargetError(f"cannot read checkpoint: {exc}", file=str(path)) from None
-    if not isinstance(state, dict):
+    if not isinstance(state, dict) or not isinstance(state.get("algorithm"), dict):
+        held = type(state).__name__ if not isinstance(state, dict) else "no 'algorithm' state"
+        raise RetargetError(f"not a retarget checkpoint (it holds {held})", file=str(path))
+    bad = _first_non_finite(state["algorithm"], "algorithm")
+    if bad is not None:
         raise RetargetError(
-            f"not a retarget checkpoint (holds a {type(state).__name__}, not a mapping)",
+            f"the checkpoint's weights are not finite ({bad} holds NaN or inf)",
             file=str(path),
+            hint="resume from an earlier checkpoint of the run (checkpoints/ckpt-*.pt)",
         )
     return state
+
+
+def _first_non_finite(value: Any, where: str) -> str | None:
+    """Dotted path of the first floating tensor holding NaN/inf inside ``value``, else None."""
+    if isinstance(value, torch.Tensor):
+        if value.is_floating_point() and not bool(torch.isfinite(value).all()):
+            return where
+        return None
+    if isinstance(value, dict):
+        items = value.items()
+    elif isinstance(value, list | tuple):
+        items = enumerate(value)
+    else:
+        return None
+    for key, item in items:
+        found = _first_non_finite(item, f"{where}.{key}")
+        if found is not None:
+            return found
+    return None

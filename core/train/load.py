@@ -15,6 +15,7 @@ from retarget.errors import RecipeError
 from retarget.kinds import Algorithm
 from retarget.motion.clip import MotionClip
 from retarget.recipe import ResolvedRecipe, apply_overrides, parse_text, resolve
+from retarget.recipe.source import LOCK_SECTION
 from retarget.registry import Registry
 from retarget.train.checkpoint import load_checkpoint
 from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
@@ -29,9 +30,17 @@ def locked_recipe(
     ``scene`` and ``assignments`` (``--scene``/``--set``) change the recipe before it is
     resolved, e.g. to watch a policy in a scene it was not trained in; errors name the flag.
     """
-    data = yaml.safe_load((run / LOCK).read_text())
-    lock = data.pop("_lock", {})
-    source = parse_text(yaml.safe_dump(data, sort_keys=False), str(run / LOCK), ".yaml")
+    path = run / LOCK
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise RecipeError("the run's lock file is not UTF-8 text", file=str(path)) from None
+    except OSError as exc:
+        raise RecipeError(f"cannot read the run's lock file: {exc}", file=str(path)) from None
+    source = parse_text(text, str(path), ".yaml")  # plain data only, bounded, no duplicates
+    lock = yaml.safe_load(text).get(LOCK_SECTION) or {}
+    if not isinstance(lock, dict):
+        raise RecipeError(f"'{LOCK_SECTION}' must be a mapping", file=str(path))
     source = apply_overrides(source, shorthands={"scene": scene}, assignments=assignments)
     return resolve(source, registry), lock
 

@@ -54,3 +54,19 @@ def test_not_a_checkpoint(tmp_path: Path) -> None:
     path.write_bytes(b"garbage")
     with pytest.raises(RetargetError, match="cannot read"):
         load_checkpoint(path)
+
+
+def test_a_mapping_without_algorithm_state_is_not_a_checkpoint(tmp_path: Path) -> None:
+    path = tmp_path / "x.pt"
+    torch.save({"weights": torch.zeros(2)}, path)
+    with pytest.raises(RetargetError, match="no 'algorithm' state"):
+        load_checkpoint(path)
+
+
+def test_non_finite_weights_are_refused_naming_the_tensor(tmp_path: Path) -> None:
+    w = torch.zeros(3)
+    w[1] = float("nan")
+    path = save_checkpoint(tmp_path / "ckpt.pt", {"algorithm": {"actor": {"0.weight": w}}})
+    with pytest.raises(RetargetError, match=r"algorithm\.actor\.0\.weight holds NaN") as err:
+        load_checkpoint(path)
+    assert err.value.hint and "earlier checkpoint" in err.value.hint
