@@ -25,6 +25,13 @@ CHANNEL_NAMES = {
     "yrotation": "Yrotation",
     "zrotation": "Zrotation",
 }
+MIN_FRAME_TIME = 1e-4
+"""Shortest frame time read, seconds (10 kHz; motion capture runs at 30-480 Hz)."""
+MAX_FRAME_TIME = 1.0
+"""Longest frame time read, seconds: slower than 1 Hz is not motion capture, and resampling it
+to the control rate would allocate without bound."""
+MAX_SECONDS = 3 * 3600.0
+"""Longest clip read (frames x frame time), seconds."""
 MAX_JOINTS = 1024
 MAX_CHANNELS_PER_JOINT = 6
 
@@ -248,8 +255,18 @@ def _motion_header(lines: list[str], start: int, file: str) -> tuple[int, float,
         raise MotionError(
             f"frame time {parts[2]!r} is not a number", file=file, line=i + 1
         ) from None
-    if not (math.isfinite(frame_time) and frame_time > 0):
-        raise MotionError(f"frame time must be positive, got {parts[2]}", file=file, line=i + 1)
+    if not (math.isfinite(frame_time) and MIN_FRAME_TIME <= frame_time <= MAX_FRAME_TIME):
+        raise MotionError(
+            f"frame time {parts[2]} s is out of range: between {MIN_FRAME_TIME} s (10 kHz) and "
+            f"{MAX_FRAME_TIME} s (1 Hz)",
+            file=file, line=i + 1,
+        )  # fmt: skip
+    if frames * frame_time > MAX_SECONDS:
+        raise MotionError(
+            f"{frames} frames of {frame_time} s last {frames * frame_time / 3600:.1f} h; a clip "
+            f"is at most {MAX_SECONDS / 3600:.0f} h",
+            file=file, line=i + 1,
+        )  # fmt: skip
     return frames, frame_time, i + 1
 
 

@@ -56,6 +56,14 @@ def convert(poses: np.ndarray, source: str, target: str) -> np.ndarray:
     return np.concatenate([pos, rot.from_matrix(mat)], axis=-1)
 
 
+MAX_SECONDS = 3 * 3600.0
+"""Longest recording read, seconds (it is resampled to the control rate)."""
+MAX_GAP = 10.0
+"""Longest gap between two samples, seconds: a headset streams at 72-120 Hz."""
+MAX_DISTANCE = 100.0
+"""Farthest a device may be from the origin, metres (a room-scale or walking session)."""
+
+
 @dataclass
 class DeviceRecording:
     """A device stream in the retarget convention."""
@@ -122,11 +130,21 @@ def read_recording(path: str | Path) -> DeviceRecording:
     for k, (number, line) in enumerate(lines[1:]):
         obj = load(number, line)
         t = obj.get("t")
-        if not isinstance(t, int | float) or not math.isfinite(t):
+        if isinstance(t, bool) or not isinstance(t, int | float) or not math.isfinite(t):
             raise MotionError("sample needs a finite time 't' in seconds", file=path, line=number)
         if k and t <= time[k - 1]:
             raise MotionError(
                 f"time {t} is not after the previous sample's {time[k - 1]}", file=path, line=number
+            )
+        if k and t - time[k - 1] > MAX_GAP:
+            raise MotionError(
+                f"{t - time[k - 1]:.1f} s since the previous sample; samples are at most "
+                f"{MAX_GAP:.0f} s apart",
+                file=path, line=number,
+            )  # fmt: skip
+        if k and t - time[0] > MAX_SECONDS:
+            raise MotionError(
+                f"the recording is longer than {MAX_SECONDS / 3600:.0f} h", file=path, line=number
             )
         time[k] = t
         for d, name in enumerate(DEVICES):
@@ -138,17 +156,28 @@ def read_recording(path: str | Path) -> DeviceRecording:
             if (
                 not isinstance(value, list)
                 or len(value) != 7
-                or not all(isinstance(v, int | float) and math.isfinite(v) for v in value)
+                or not all(
+                    isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+                    for v in value
+                )
             ):
                 raise MotionError(
                     f"'{name}' must be 7 finite numbers [x, y, z, qw, qx, qy, qz] or null",
                     file=path,
                     line=number,
                 )
+            if max(abs(v) for v in value[:3]) > MAX_DISTANCE:
+                raise MotionError(
+                    f"'{name}' is {max(abs(v) for v in value[:3]):.0f} m from the origin; devices "
+                    f"are at most {MAX_DISTANCE:.0f} m away (units in metres?)",
+                    file=path, line=number,
+                )  # fmt: skip
             q = np.array(value[3:], dtype=np.float64)
             if not 0.5 < np.linalg.norm(q) < 1.5:
                 raise MotionError(f"'{name}' quaternion is not unit length", file=path, line=number)
             poses[k, d] = np.concatenate([value[:3], rot.normalize(q)])
             tracked[k, d] = True
+    if not tracked.any():
+        raise MotionError("no device is tracked in any sample (every pose is null)", file=path)
     poses = convert(poses, convention, "retarget")
     return DeviceRecording(time, poses, tracked)

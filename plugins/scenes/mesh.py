@@ -38,6 +38,12 @@ if TYPE_CHECKING:
 RAY_START = 100.0  # metres above the mesh top where the rasterising rays start
 
 
+MAX_EXTENT = 1000.0
+"""Widest mesh a scene takes, metres: anything larger is almost always a units mistake."""
+MAX_GRID_POINTS = 2_000_000
+"""Most height-grid samples a mesh is rasterised into (one ray each, once per scene)."""
+
+
 class MeshConfig(PluginConfig):
     path: str | None = Field(None, description="OBJ, PLY or GLB file (None: the bare floor)")
     scale: float = Field(1.0, gt=0, description="multiplies every vertex (units to metres)")
@@ -63,7 +69,32 @@ def load_mesh(cfg: MeshConfig):
     if cfg.y_up:
         verts = verts[:, [0, 2, 1]] * np.array([1.0, -1.0, 1.0])
     verts = verts * cfg.scale + np.asarray(cfg.offset)
+    if not np.isfinite(verts).all():
+        raise PluginError("the mesh has non-finite vertices", file=path, plugin="scene mesh")
+    extent = float(np.ptp(verts, axis=0).max())
+    if extent > MAX_EXTENT:
+        raise PluginError(
+            f"the mesh is {extent:.0f} m across (after scale {cfg.scale}); a scene is at most "
+            f"{MAX_EXTENT:.0f} m",
+            file=path, plugin="scene mesh", hint="check the units: scale: 0.01 for centimetres",
+        )  # fmt: skip
     return trimesh.Trimesh(verts, np.asarray(mesh.faces), process=False)
+
+
+def hull_safe(verts):
+    """``verts`` plus, for a flat (coplanar) set, a copy moved 2 cm along the plane's normal
+    (downwards when it has a vertical part): MuJoCo computes every mesh's convex hull and
+    refuses a flat one, and a platform or a floor plate is a valid scene."""
+    import numpy as np
+
+    centred = verts - verts.mean(axis=0)
+    _, s, vt = np.linalg.svd(centred, full_matrices=False)
+    if len(s) == 3 and s[-1] > 1e-6 * max(s[0], 1e-12):
+        return verts
+    normal = vt[-1]
+    if normal[2] > 0:
+        normal = -normal
+    return np.concatenate([verts, verts + 0.02 * normal])
 
 
 class MeshScene(Scene):
@@ -89,10 +120,22 @@ class MeshScene(Scene):
         lo, hi = mesh.bounds[0, :2], mesh.bounds[1, :2]
         ncol = max(int(np.ceil((hi[0] - lo[0]) / res)) + 1, 2)
         nrow = max(int(np.ceil((hi[1] - lo[1]) / res)) + 1, 2)
+        if ncol * nrow > MAX_GRID_POINTS:
+            raise PluginError(
+                f"the height grid would have {ncol * nrow:,} points at resolution {res} m "
+                f"(at most {MAX_GRID_POINTS:,})",
+                file=self.config.path, plugin="scene mesh",
+                hint="use a coarser resolution or a smaller mesh",
+            )  # fmt: skip
         xs = lo[0] + np.arange(ncol) * res
         ys = lo[1] + np.arange(nrow) * res
         spec = mujoco.MjSpec()
-        spec.add_mesh(name="m", uservert=mesh.vertices.ravel(), userface=mesh.faces.ravel())
+        spec.add_mesh(
+            name="m",
+            uservert=hull_safe(mesh.vertices).ravel(),
+            userface=mesh.faces.ravel(),
+            inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,  # a flat mesh has no volume
+        )
         spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="m")
         model = spec.compile()
         data = mujoco.MjData(model)
@@ -150,8 +193,7 @@ class MeshScene(Scene):
             verts = np.asarray(piece.vertices, dtype=float)
             if len(verts) < 3:
                 continue
-            if np.ptp(verts, axis=0).min() < 1e-4:  # flat: thicken downwards
-                verts = np.concatenate([verts, verts - [0.0, 0.0, 0.02]])
+            verts = hull_safe(verts)
             spec.add_mesh(name=f"scene_mesh_{k}", uservert=verts.ravel())
             spec.worldbody.add_geom(
                 name=f"scene_mesh_{k}",

@@ -127,6 +127,10 @@ def test_recording_round_trip(convention, tmp_path: Path):
     ('{"t": "x"}', "finite time"),
     ("not json", "not JSON"),
     ('{"t": 0, "hmd": [0,0,0,2,2,2,2]}', "unit length"),
+    ('{"t": true, "hmd": [0,0,0,1,0,0,0]}', "finite time"),
+    ('{"t": 0, "hmd": [0,0,true,1,0,0,0]}', "7 finite"),
+    ('{"t": 1e9, "hmd": [0,0,0,1,0,0,0]}', "at most 10 s apart"),
+    ('{"t": 0, "hmd": [5000,0,1.6,1,0,0,0]}', "at most 100 m away"),
 ])
 def test_recording_errors_name_the_line(line, expect, tmp_path: Path):
     path = tmp_path / "bad.jsonl"
@@ -135,3 +139,21 @@ def test_recording_errors_name_the_line(line, expect, tmp_path: Path):
     with pytest.raises(MotionError, match=expect) as info:
         read_recording(path)
     assert info.value.line == 3 and info.value.file == str(path)
+
+
+def test_a_recording_where_nothing_is_tracked_is_refused(tmp_path: Path):
+    path = tmp_path / "lost.jsonl"
+    header = '{"format": "retarget-devices", "version": 1}'
+    samples = [f'{{"t": {k / 72}, "hmd": null, "left": null, "right": null}}' for k in range(5)]
+    path.write_text("\n".join([header, *samples]) + "\n")
+    with pytest.raises(MotionError, match="no device is tracked"):
+        read_recording(path)
+
+
+def test_an_hours_long_recording_is_refused_before_it_is_resampled(tmp_path: Path):
+    path = tmp_path / "long.jsonl"
+    header = '{"format": "retarget-devices", "version": 1}'
+    samples = [f'{{"t": {k * 9.0}, "hmd": [0,0,1.6,1,0,0,0]}}' for k in range(1202)]
+    path.write_text("\n".join([header, *samples]) + "\n")
+    with pytest.raises(MotionError, match="longer than 3 h"):
+        read_recording(path)

@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 import torch
+import trimesh
 
 from retarget.errors import PluginError
 from retarget.plugins.characters.human import Human
@@ -232,3 +233,29 @@ def test_mesh_errors_name_the_file(tmp_path) -> None:
         with pytest.raises(PluginError) as err:
             MeshScene(MeshScene.Config(path=str(path)))
         assert path.name in str(err.value) and "mesh" in str(err.value)
+
+
+def _flat_platform(path) -> None:
+    verts = np.array([[0, 0, 0.3], [2, 0, 0.3], [2, 1, 0.3], [0, 1, 0.3]], dtype=float)
+    trimesh.Trimesh(verts, np.array([[0, 1, 2], [0, 2, 3]])).export(path)
+
+
+@pytest.mark.parametrize("collision", ["heightfield", "hulls"])
+def test_a_flat_mesh_is_a_valid_scene(tmp_path, collision: str) -> None:
+    path = tmp_path / "platform.obj"
+    _flat_platform(path)
+    scene = MeshScene(MeshScene.Config(path=str(path), collision=collision))
+    heights = scene.height_at(torch.tensor([[[1.0, 0.5], [5.0, 5.0]]]))
+    torch.testing.assert_close(heights, torch.tensor([[0.3, 0.0]]), atol=1e-3, rtol=0)
+    build_world(Human(), scene)
+
+
+def test_mesh_limits_are_stated_in_the_error(tmp_path) -> None:
+    path = tmp_path / "platform.obj"
+    _flat_platform(path)
+    with pytest.raises(PluginError, match=r"2000 m across .* at most 1000 m"):
+        MeshScene(MeshScene.Config(path=str(path), scale=1000.0))
+    with pytest.raises(PluginError, match=r"height grid would have .* \(at most 2,000,000\)"):
+        MeshScene(MeshScene.Config(path=str(path), scale=200.0))
+    with pytest.raises(PluginError, match="non-finite"):  # 2 * 1e308 overflows
+        MeshScene(MeshScene.Config(path=str(path), scale=1e308))
