@@ -2,20 +2,24 @@
 
 from __future__ import annotations
 
+from typing import Annotated
+
 from pydantic import BaseModel, ConfigDict, Field
 
 
 class EnvOptions(BaseModel):
     """Environment settings that are not plugins (plugins configure the rest)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
-    num_envs: int = Field(256, ge=1, description="environments stepped together")
-    privileged_offsets: tuple[int, ...] = Field(
-        (1, 3, 6), description="future reference frames the critic sees (asymmetric critic)"
+    num_envs: int = Field(256, ge=1, le=65536, description="environments stepped together")
+    privileged_offsets: tuple[Annotated[int, Field(ge=1, le=3600)], ...] = Field(
+        (1, 3, 6),
+        max_length=64,
+        description="future reference frames the critic sees (asymmetric critic)",
     )
     reset_lift: float = Field(
-        0.02, ge=0, description="root lift at reset, m (kinematic feet penetrate a bit)"
+        0.02, ge=0, le=1, description="root lift at reset, m (kinematic feet penetrate a bit)"
     )
     groups: dict[str, list[str]] | None = Field(
         None,

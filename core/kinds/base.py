@@ -19,7 +19,7 @@ NAME_RE = re.compile(r"^[a-z][a-z0-9_]*$")
 class PluginConfig(BaseModel):
     """Base of every plugin's ``Config``: unknown fields are errors and values are immutable."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True, allow_inf_nan=False)
 
 
 class Plugin(ABC):

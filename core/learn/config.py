@@ -23,23 +23,33 @@ Decisions (figures from ``benchmarks/bench_ppo_update.py`` on a 2-core machine):
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field
 
 from retarget.kinds import PluginConfig
+
+Hidden = Annotated[
+    tuple[Annotated[int, Field(ge=1, le=8192)], ...],
+    Field(min_length=1, max_length=16, description="hidden layer widths"),
+]
+"""Layer widths of an MLP: bounded, so a typo cannot ask for gigabytes of weights."""
 
 
 class PPOConfig(PluginConfig):
     """PPO hyper-parameters (defaults: paper Table 3; the environment count is the recipe's
     ``env.num_envs``, one source of truth for every algorithm)."""
 
-    rollout_steps: int = Field(32, gt=0, description="steps per env per iteration (measured)")
-    learning_rate: float = Field(1.2e-4, gt=0)
+    rollout_steps: int = Field(
+        32, gt=0, le=10_000, description="steps per env per iteration (measured)"
+    )
+    learning_rate: float = Field(1.2e-4, gt=0, le=1)
     gamma: float = Field(0.97, ge=0, lt=1)
     lam: float = Field(0.95, ge=0, le=1, description="GAE lambda")
-    epochs: int = Field(5, gt=0)
-    minibatch_size: int = Field(8192, gt=0, description="samples per gradient step")
+    epochs: int = Field(5, gt=0, le=1000)
+    minibatch_size: int = Field(
+        8192, gt=0, le=10_000_000, description="samples per gradient step"
+    )
     clip: float = Field(0.2, gt=0, description="policy ratio clip")
     value_clip: float | None = Field(0.2, gt=0, description="value change clip; null: none")
     value_loss_coef: float = Field(0.2, ge=0)
@@ -49,8 +59,8 @@ class PPOConfig(PluginConfig):
     noise_parameter: Literal["variance", "std"] = "variance"
     learn_std: bool = False
     activation: Literal["tanh", "elu", "relu"] = "tanh"
-    actor_hidden: tuple[int, ...] = (300, 200, 100)
-    critic_hidden: tuple[int, ...] = (400, 400, 300, 200)
+    actor_hidden: Hidden = (300, 200, 100)
+    critic_hidden: Hidden = (400, 400, 300, 200)
     normalize_obs: bool = True
     obs_clip: float = Field(10.0, gt=0)
     normalize_values: bool = True
@@ -97,9 +107,11 @@ class DaggerConfig(PluginConfig):
     teacher_group: str = Field("teacher", description="observation group the teacher reads")
     actor_group: str = Field("actor", description="observation group the student reads")
     rollout_steps: int = Field(32, gt=0, le=10_000, description="steps per env per iteration")
-    learning_rate: float = Field(5e-4, gt=0)
+    learning_rate: float = Field(5e-4, gt=0, le=1)
     epochs: int = Field(4, gt=0, le=1000, description="passes over the buffer per iteration")
-    minibatch_size: int = Field(2048, gt=0, description="samples per gradient step")
+    minibatch_size: int = Field(
+        2048, gt=0, le=10_000_000, description="samples per gradient step"
+    )
     buffer_rollouts: int = Field(
         1, ge=1, le=64, description="recent rollouts trained on (1: only the newest)"
     )
@@ -117,7 +129,7 @@ class DaggerConfig(PluginConfig):
     )
     max_grad_norm: float = Field(1.0, gt=0)
     activation: Literal["tanh", "elu", "relu"] = "tanh"
-    actor_hidden: tuple[int, ...] = (300, 200, 100)
+    actor_hidden: Hidden = (300, 200, 100)
     obs_clip: float = Field(10.0, gt=0)
     collect_threads: int = Field(1, ge=0, description="torch threads while acting; 0: leave")
     update_threads: int = Field(2, ge=0, description="torch threads while updating; 0: leave")

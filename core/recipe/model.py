@@ -17,7 +17,7 @@ from retarget.sim.settings import SimSettings
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class ComponentRef(BaseModel):
@@ -59,7 +59,7 @@ class Recipe(Strict):
         "digits, '.', '_' and '-', so a run is always written inside the runs directory",
         pattern=r"^[A-Za-z0-9._-]{1,100}$",
     )
-    seed: int = 0
+    seed: int = Field(0, ge=0, le=2**63 - 1, description="random seed of the run")
     character: ComponentRef
     scene: ComponentRef | None = None
     sensors: list[ComponentRef] = Field(default_factory=list)

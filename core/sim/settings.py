@@ -18,20 +18,23 @@ ACTUATIONS: tuple[str, ...] = get_args(Actuation)
 class SimSettings(BaseModel):
     """Physics timing: ``substeps`` steps of ``1/(control_hz*substeps)`` s per control step."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
-    control_hz: float = Field(36.0, gt=0, description="policy rate (the paper uses 36 Hz)")
-    substeps: int = Field(10, ge=1, description="physics steps per control step")
-    threads: int = Field(0, ge=0, description="physics threads; 0 uses every core")
+    control_hz: float = Field(
+        36.0, gt=0, le=1000, description="policy rate (the paper uses 36 Hz)"
+    )
+    substeps: int = Field(10, ge=1, le=1000, description="physics steps per control step")
+    threads: int = Field(0, ge=0, le=1024, description="physics threads; 0 uses every core")
     actuation: Actuation = Field(
         "torque",
         description="torque: actions scale each joint's torque limit (the paper); pd: actions "
         "are joint-angle targets of torque-limited PD servos (retarget.sim.actuation)",
     )
     pd_saturation: float = Field(
-        0.5, gt=0, description="pd: angle error (rad) at which a servo reaches its torque limit"
+        0.5, gt=0, le=10,
+        description="pd: angle error (rad) at which a servo reaches its torque limit",
     )
-    pd_damping: float = Field(0.1, ge=0, description="pd: kd = pd_damping * kp (seconds)")
+    pd_damping: float = Field(0.1, ge=0, le=10, description="pd: kd = pd_damping * kp (seconds)")
 
     @property
     def timestep(self) -> float:

@@ -44,6 +44,13 @@ def save_checkpoint(path: str | Path, state: dict[str, Any]) -> Path:
             handle.flush()
             os.fsync(handle.fileno())
         os.replace(tmp, path)
+    except OSError as exc:  # a full disk, a vanished directory: the previous file is intact
+        Path(tmp).unlink(missing_ok=True)
+        raise RetargetError(
+            f"cannot write checkpoint: {exc.strerror or exc}",
+            file=str(path),
+            hint="the previous checkpoint is intact; free space and resume with --resume",
+        ) from exc
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

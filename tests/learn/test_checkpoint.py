@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import errno
 import os
 import signal
 import subprocess
@@ -29,6 +30,7 @@ def test_round_trip_is_exact(tmp_path: Path) -> None:
             "generator": g.get_state(),
         },
         "counters": {"iteration": 7, "env_steps": 1234},
+        "algorithm": {"actor": {"w": torch.ones(2)}},
     }
     path = save_checkpoint(tmp_path / "a" / "ckpt.pt", state)
     back = load_checkpoint(path)
@@ -56,7 +58,7 @@ WRITER = textwrap.dedent(
     """
     import sys, torch
     from retarget.train.checkpoint import save_checkpoint
-    big = {"weights": torch.ones(150_000_000 // 4 * 2)}  # ~300 MB: a write takes a while
+    big = {"algorithm": {"w": torch.ones(150_000_000 // 4 * 2)}}  # ~300 MB: a write takes a while
     save_checkpoint(sys.argv[1], big)
     """
 )
@@ -83,8 +85,27 @@ def _kill_mid_write(path: Path) -> bool:
 
 def test_sigkill_mid_write_keeps_the_previous_checkpoint(tmp_path: Path) -> None:
     path = tmp_path / "ckpt.pt"
-    save_checkpoint(path, {"iteration": 1, "weights": torch.arange(10.0)})
+    save_checkpoint(path, {"iteration": 1, "algorithm": {"w": torch.arange(10.0)}})
     killed = any(_kill_mid_write(path) for _ in range(3))
     assert killed, "could not catch the writer mid-write"
     back = load_checkpoint(path)
-    assert back["iteration"] == 1 and torch.equal(back["weights"], torch.arange(10.0))
+    assert back["iteration"] == 1 and torch.equal(back["algorithm"]["w"], torch.arange(10.0))
+
+
+def test_a_full_disk_names_the_file_and_keeps_the_previous_checkpoint(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = tmp_path / "ckpt.pt"
+    save_checkpoint(path, {"algorithm": {"w": torch.arange(3.0)}})
+
+    def full(obj, handle) -> None:
+        handle.write(b"x" * 100_000)  # part of the file made it before the disk filled
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(torch, "save", full)
+    with pytest.raises(RetargetError, match="No space left on device") as err:
+        save_checkpoint(path, {"algorithm": {"w": torch.zeros(3)}})
+    monkeypatch.undo()
+    assert err.value.file == str(path) and "previous checkpoint is intact" in err.value.hint
+    assert torch.equal(load_checkpoint(path)["algorithm"]["w"], torch.arange(3.0))
+    assert [p.name for p in tmp_path.iterdir()] == ["ckpt.pt"]  # no temporary file left
