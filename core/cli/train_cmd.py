@@ -6,6 +6,7 @@ import argparse
 import json
 from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
+from typing import Any
 
 from retarget.cli.numbers import amount, count
 from retarget.cli.recipe_args import add_recipe_flags, load_from_args
@@ -26,12 +27,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--steps",
         type=count(1, 10**12),
-        help="stop after this many environment steps (with --resume: in total)",
+        help="stop after this many environment steps (with --resume: this many more)",
     )
     parser.add_argument(
         "--minutes",
         type=amount(0.0, 1e6),
-        help="stop after this many minutes (with --resume: in total)",
+        help="stop after this many minutes (with --resume: this many more)",
     )
     parser.add_argument("--resume", metavar="RUN", help="continue a run (runs/NAME/latest)")
     parser.add_argument(
@@ -59,11 +60,48 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--checkpoint-every",
         type=count(1, 10**6),
-        default=10,
-        help="iterations between checkpoints",
+        help=f"iterations between checkpoints (default: {DEFAULT_SETTINGS['checkpoint_every']}; "
+        "recorded in the run and kept by --resume)",
     )
-    parser.add_argument("--no-tensorboard", action="store_true", help="CSV logs only")
+    parser.add_argument(
+        "--no-tensorboard",
+        action="store_const",
+        const=False,
+        dest="tensorboard",
+        help="CSV logs only (recorded in the run and kept by --resume)",
+    )
     parser.set_defaults(handler=run)
+
+
+SETTINGS = "train_settings.json"
+"""How a run trains beyond its recipe (checkpoint interval, logging), kept by ``--resume``."""
+DEFAULT_SETTINGS: dict[str, Any] = {"checkpoint_every": 10, "tensorboard": True}
+
+
+def run_settings(run_dir: Path, given: dict[str, Any], *, resume: bool) -> dict[str, Any]:
+    """The run's settings: flags given now, else what the run recorded (on ``--resume``), else
+    the defaults; written back so the next resume keeps them."""
+    path = run_dir / SETTINGS
+    recorded: dict[str, Any] = {}
+    if resume and path.exists():
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise RecipeError(f"cannot read the run's settings: {exc}", file=str(path)) from None
+        every = data.get("checkpoint_every") if isinstance(data, dict) else None
+        tb = data.get("tensorboard") if isinstance(data, dict) else None
+        if not (isinstance(every, int) and 1 <= every <= 10**6 and isinstance(tb, bool)):
+            raise RecipeError(
+                "the run's settings must be {checkpoint_every: 1..1000000, tensorboard: bool}",
+                file=str(path),
+            )
+        recorded = {"checkpoint_every": every, "tensorboard": tb}
+    settings = {
+        key: given[key] if given.get(key) is not None else recorded.get(key, default)
+        for key, default in DEFAULT_SETTINGS.items()
+    }
+    path.write_text(json.dumps(settings) + "\n", encoding="utf-8")
+    return settings
 
 
 def _resume_recipe(run: Path, registry: Registry, threads: int | None):
@@ -97,6 +135,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     from retarget.train.warm_start import INIT_FROM, warm_start
     if args.steps is None and args.minutes is None:
         out.print("no --steps or --minutes given: training until Ctrl-C (checkpoint on exit)")
+    given = {"checkpoint_every": args.checkpoint_every, "tensorboard": args.tensorboard}
     if args.resume and (args.init_from or args.teacher):
         raise RecipeError(
             "--resume continues a run with its own weights and recipe; --init-from and "
@@ -140,11 +179,12 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         name = resolved.recipe.name or default_run_name(resolved.character.entry.name, seen)
         context = starting_run(args.runs_dir, name)  # removed again if the start fails
     with context as run_dir:
+        settings = run_settings(run_dir, given, resume=bool(args.resume))
         trainer = Trainer(
             resolved,
             run_dir,
-            checkpoint_every=args.checkpoint_every,
-            tensorboard=not args.no_tensorboard,
+            checkpoint_every=settings["checkpoint_every"],
+            tensorboard=settings["tensorboard"],
             registry=registry,
         )
         if args.resume:
@@ -160,8 +200,12 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         f"run directory: {run_dir}  ({trainer.env.num_envs} envs, "
         f"{trainer.env.character.name}, obs {dict(trainer.env.obs_dims)})"
     )
-    budget = Budget(steps=args.steps, minutes=args.minutes)
-    total = args.steps if args.steps is not None else None
+    done = trainer.progress  # with --resume the budget is on top of what the run has done
+    budget = Budget(
+        steps=None if args.steps is None else done.env_steps + args.steps,
+        minutes=None if args.minutes is None else done.elapsed / 60.0 + args.minutes,
+    )
+    total = budget.steps
     columns = [
         TextColumn("[bold]train"),
         BarColumn(),
@@ -172,7 +216,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         ),
         TimeRemainingColumn(),
     ]
-    minutes_total = 60.0 * args.minutes if args.minutes is not None else None
+    minutes_total = 60.0 * budget.minutes if budget.minutes is not None else None
     with Progress(*columns, console=out, transient=False) as bar:
         task = bar.add_task("train", total=total or minutes_total, rate=0.0, ret=0.0, len=0.0)
 

@@ -3,6 +3,7 @@ recipe's motion format is the one that reads the clips."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +16,8 @@ from retarget.motion.sources import load_motions
 from retarget.plugins.formats.bvh import Bvh
 from retarget.recipe import parse_text, resolve
 from retarget.registry.loader import load_plugins
+from retarget.train.checkpoint import load_checkpoint
+from retarget.train.run_dir import latest_checkpoint
 
 
 def test_num_envs_and_threads_flags_are_locked_and_the_run_resumes(
@@ -27,9 +30,9 @@ def test_num_envs_and_threads_flags_are_locked_and_the_run_resumes(
     run = tmp_path / "tiny" / "latest"
     lock = yaml.safe_load((run / "recipe.lock.yaml").read_text())
     assert lock["env"]["num_envs"] == 2 and lock["sim"]["threads"] == 1
-    assert main(["train", "--resume", str(run), "--steps", "32", "--no-tensorboard"]) == 0
+    assert main(["train", "--resume", str(run), "--steps", "16", "--no-tensorboard"]) == 0
     assert "resumed" in capsys.readouterr().out
-    assert main(["train", "--resume", str(run), "--threads", "2", "--steps", "48",
+    assert main(["train", "--resume", str(run), "--threads", "2", "--steps", "16",
                  "--no-tensorboard"]) == 0  # fmt: skip
     assert yaml.safe_load((run / "recipe.lock.yaml").read_text())["sim"]["threads"] == 2
     assert main(["train", "--resume", str(run), "--num-envs", "4", "--steps", "64"]) != 0
@@ -143,3 +146,21 @@ def test_a_failed_start_leaves_no_run_and_keeps_latest(tmp_path: Path, capsys) -
     assert main(["train", str(recipe), "--motions", str(broken), "--steps", "16",
                  "--runs-dir", str(tmp_path / "fresh"), "--no-tensorboard"]) == 2  # fmt: skip
     assert not (tmp_path / "fresh" / "tiny").exists()
+
+
+def test_resume_keeps_the_runs_settings_and_its_budget_is_more(tmp_path: Path) -> None:
+    recipe = tmp_path / "tiny.yaml"
+    recipe.write_text(TINY)
+    assert main(["train", str(recipe), "--num-envs", "2", "--steps", "32", "--runs-dir",
+                 str(tmp_path), "--checkpoint-every", "1", "--no-tensorboard"]) == 0  # fmt: skip
+    run = (tmp_path / "tiny" / "latest").resolve()
+    settings = json.loads((run / "train_settings.json").read_text())
+    assert settings == {"checkpoint_every": 1, "tensorboard": False}
+    before = latest_checkpoint(run)
+    first = load_checkpoint(before)["progress"]
+    assert main(["train", "--resume", str(run), "--steps", "32"]) == 0  # no flags repeated
+    after = load_checkpoint(latest_checkpoint(run))["progress"]
+    assert after["env_steps"] >= first["env_steps"] + 32  # "more", not "in total"
+    ckpts = sorted((run / "checkpoints").glob("ckpt-*.pt"))
+    assert len(ckpts) == after["iteration"]  # one per iteration, as recorded
+    assert not (run / "tensorboard").exists()
