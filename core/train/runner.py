@@ -100,6 +100,7 @@ class Trainer:
         self.logger = MetricsLogger(run, tensorboard=tensorboard)
         write_lock(resolved, run)
         self._stop_requests = 0
+        self._saving = False
 
     # ------------------------------------------------------------------ checkpoints
 
@@ -114,6 +115,15 @@ class Trainer:
                 "python": random.getstate(),
             },
         }
+
+    def _save_uninterrupted(self) -> Path:
+        """:meth:`save` with Ctrl-C/SIGTERM deferred: a stop pressed while the file is written
+        is honoured after it, so the last checkpoint is never the one that gets lost."""
+        self._saving = True
+        try:
+            return self.save()
+        finally:
+            self._saving = False
 
     def save(self) -> Path:
         path = self.run / CHECKPOINTS / f"ckpt-{self.progress.iteration:07d}.pt"
@@ -141,6 +151,9 @@ class Trainer:
 
     def _request_stop(self, signum: int, frame: FrameType | None) -> None:
         self._stop_requests += 1
+        if self._saving:  # a checkpoint being written is finished first, whatever is pressed
+            print("\nwriting the checkpoint; it is finished first", file=sys.stderr, flush=True)
+            return
         if self._stop_requests > 1:
             raise KeyboardInterrupt
         self.stop_reason = "interrupted"
@@ -189,8 +202,8 @@ class Trainer:
                 if self._stop_requests:
                     break
                 if p.iteration % self.checkpoint_every == 0:
-                    last = self.save()
-            last = self.save()
+                    last = self._save_uninterrupted()
+            last = self._save_uninterrupted()
         finally:
             for sig, handler in previous.items():
                 signal.signal(sig, handler)

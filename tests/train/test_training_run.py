@@ -277,3 +277,24 @@ def test_a_run_plays_in_another_scene_and_refuses_other_observations(
     assert rc != 0
     err = capsys.readouterr().err
     assert "does not fit" in err and "--set observers=[height_map]" in err
+
+
+def test_ctrl_c_pressed_during_the_final_checkpoint_does_not_lose_it(
+    recipe: Path, tmp_path: Path
+) -> None:
+    t = trainer(recipe, tmp_path, "impatient")
+    save = t.save
+    pressed = []
+
+    def save_while_pressed() -> Path:
+        if t._stop_requests:  # the final checkpoint: the user presses Ctrl-C twice more
+            for _ in range(2):
+                os.kill(os.getpid(), signal.SIGINT)
+                pressed.append(1)
+        return save()
+
+    t.save = save_while_pressed  # type: ignore[method-assign]
+    t._request_stop(signal.SIGINT, None)  # the first Ctrl-C: stop after this iteration
+    last = t.train(Budget(steps=10 * SAMPLES))
+    assert pressed and last.exists()
+    assert load_checkpoint(last)["progress"]["iteration"] == t.progress.iteration == 1
