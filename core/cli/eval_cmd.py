@@ -15,26 +15,38 @@ if TYPE_CHECKING:
     from rich.table import Table
 
 COLUMNS = (
-    ("headset_cm", "HMD cm", "{:.1f}"),
-    ("headset_deg", "HMD deg", "{:.1f}"),
-    ("controller_cm", "ctrl cm", "{:.1f}"),
-    ("success_20s", "succ 20s", "{:.2f}"),
-    ("success_30s", "succ 30s", "{:.2f}"),
-    ("success_frame", "succ frame", "{:.2f}"),
-    ("success_simxr", "succ SimXR", "{:.2f}"),
-    ("mpjpe_mm", "MPJPE", "{:.0f}"),
-    ("pa_mpjpe_mm", "PA-MPJPE", "{:.0f}"),
-    ("jerk_km_s3", "jerk km/s3", "{:.2f}"),
-    ("foot_skate_mm", "skate mm", "{:.1f}"),
-    ("contact_agreement", "contact", "{:.2f}"),
-    ("scene_contact_agreement", "scene contact", "{:.2f}"),
-    ("penetration_mean_mm", "pen mean mm", "{:.1f}"),
-    ("penetration_max_mm", "pen max mm", "{:.1f}"),
-    ("falls_per_min", "falls/min", "{:.1f}"),
-    ("box_side_per_min", "box side/min", "{:.1f}"),
-    ("box_top_per_min", "box top/min", "{:.1f}"),
+    ("headset_cm", "HMD\ncm", "{:.1f}"),
+    ("headset_deg", "HMD\ndeg", "{:.1f}"),
+    ("controller_cm", "ctrl\ncm", "{:.1f}"),
+    ("success_20s", "succ\n20s", "{:.2f}"),
+    ("success_30s", "succ\n30s", "{:.2f}"),
+    ("success_frame", "succ\nframe", "{:.2f}"),
+    ("success_simxr", "succ\nSimXR", "{:.2f}"),
+    ("mpjpe_mm", "MPJPE\nmm", "{:.0f}"),
+    ("pa_mpjpe_mm", "PA-\nMPJPE", "{:.0f}"),
+    ("jerk_km_s3", "jerk\nkm/s3", "{:.2f}"),
+    ("foot_skate_mm", "skate\nmm", "{:.1f}"),
+    ("contact_agreement", "foot\ncont", "{:.2f}"),
+    ("scene_contact_agreement", "scene\ncont", "{:.2f}"),
+    ("penetration_max_mm", "pen\nmax mm", "{:.0f}"),
+    ("falls_per_min", "falls\n/min", "{:.1f}"),
+    ("box_side_per_min", "box\nside/m", "{:.1f}"),
+    ("box_top_per_min", "box\ntop/m", "{:.1f}"),
     ("runs", "runs", "{}"),
 )
+"""What the table shows (every figure is in the JSON, with the clips' full names)."""
+SCENE_ONLY = {"scene_contact_agreement", "penetration_max_mm", "box_side_per_min",
+              "box_top_per_min"}  # fmt: skip
+FLAT_ONLY = {"success_frame", "success_simxr", "jerk_km_s3", "contact_agreement"}
+"""Shown without props; with props the scene's columns take their place (in the JSON: all)."""
+LABEL = 16
+"""Widest clip label in the table; longer names are shortened (the JSON keeps them whole)."""
+WINDOWS = {"success_20s": 20.0, "success_30s": 30.0}
+
+
+def short_label(name: str, width: int = LABEL) -> str:
+    """``name`` cut to ``width`` characters, keeping its end (clip files differ at the end)."""
+    return name if len(name) <= width else "…" + name[-(width - 1) :]
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -57,20 +69,45 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def table(report: dict) -> Table:
+    """The report as a table that fits 120 columns: two-line headers, short clip labels, and
+    the scene columns only for scenes with props. A success window longer than every run of
+    a clip reads ``<20s``: the figure would only repeat success to the clip's end."""
+    from rich import box
     from rich.table import Table
-    t = Table(title="tracking evaluation")
-    t.add_column("clip")
-    for _, label, _ in COLUMNS:
+
+    scene = "box_side_per_min" in report["overall"]
+    hidden = FLAT_ONLY if scene else SCENE_ONLY
+    shown = [col for col in COLUMNS if col[0] not in hidden]
+    t = Table(
+        title="tracking evaluation", box=box.SIMPLE_HEAD, padding=(0, 1), collapse_padding=True,
+        pad_edge=False,
+    )  # fmt: skip
+    t.add_column("clip", max_width=LABEL, no_wrap=True)
+    for _, label, _ in shown:
         t.add_column(label, justify="right")
     rows = [*report["clips"].items(), ("overall", report["overall"])]
     for name, metrics in rows:
-        cells = [fmt.format(metrics[k]) if k in metrics else "-" for k, _, fmt in COLUMNS]
-        t.add_row(name, *cells)
+        cells = []
+        for key, _, fmt in shown:
+            window = WINDOWS.get(key)
+            if key not in metrics:
+                cells.append("-")
+            elif window and name != "overall" and metrics.get("longest_run_s", 1e9) < window:
+                cells.append(f"<{window:.0f}s")
+            else:
+                cells.append(fmt.format(metrics[key]))
+        t.add_row(short_label(name), *cells)
     return t
 
 
 def run(args: argparse.Namespace, registry: Registry) -> int:
-    from rich.progress import Progress
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeRemainingColumn,
+    )
 
     from retarget.cli.console import out
     from retarget.eval import EvalSettings, evaluate
@@ -91,22 +128,27 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             fall = comp.instantiate()
             fall.bind(loaded.env.layout)
     settings = EvalSettings(every=args.every, max_seconds=args.max_seconds)
-    with Progress(console=out, transient=True) as bar:
-        task = bar.add_task("evaluating", total=None)
-        report = evaluate(
-            loaded.env,
-            loaded.algorithm.act,
-            settings,
-            on_batch=lambda done, total: bar.update(task, completed=done, total=total),
-            fall=fall,
-        )
+    columns = (
+        TextColumn("[bold]eval"), BarColumn(), MofNCompleteColumn(), TextColumn("runs"),
+        TextColumn("{task.fields[clips]}"), TimeRemainingColumn(),
+    )  # fmt: skip
+    with Progress(*columns, console=out, transient=True) as bar:
+        task = bar.add_task("eval", total=None, clips="")
+
+        def progress(done: int, total: int, clips_done: int, clips: int) -> None:
+            bar.update(task, completed=done, total=total, clips=f"{clips_done}/{clips} clips")
+
+        report = evaluate(loaded.env, loaded.algorithm.act, settings, progress, fall=fall)
     report["run"] = str(loaded.run)
     report["checkpoint"] = str(loaded.checkpoint)
     report["motions"] = args.motions or loaded.resolved.recipe.motions.path or "(generated)"
     report["settings"] = vars(settings)
-    out.print(table(report))
-    out.print(f"real-time factor (batched): {report['overall']['real_time_factor']:.1f}x")
     path = Path(args.json_out) if args.json_out else loaded.run / "eval.json"
     path.write_text(json.dumps(report, indent=2))
+    if report.get("interrupted"):
+        out.print(f"interrupted: {len(report['clips'])} clips finished, written to {path}")
+        return 130
+    out.print(table(report))
+    out.print(f"real-time factor (batched): {report['overall']['real_time_factor']:.1f}x")
     out.print(f"wrote {path}")
     return 0

@@ -70,7 +70,7 @@ def test_report_counts_box_hits_only_with_props() -> None:
         assert overall[f"box_{side}_per_min"] >= 0.0
     # six boxes anywhere on the path, clear of nothing: some runs start on or against one
     assert overall["box_top_fraction"] + overall["box_side_fraction"] > 0
-    assert "box side/min" in [c.header for c in table(report).columns]
+    assert "box\nside/m" in [c.header for c in table(report).columns]
     flat = RetargetEnv(Human(), [WALK], scene=Flat(), options=EnvOptions(num_envs=4))
     plain = evaluate(flat, lambda obs: torch.zeros(4, flat.action_dim), settings)["overall"]
     assert not any(k.startswith("box_") for k in plain)

@@ -90,4 +90,4 @@ def test_eval_report_and_table_carry_the_scene_metrics() -> None:
     assert 0.0 <= overall["penetration_mean_mm"] <= overall["penetration_max_mm"]
     assert overall["penetration_max_mm"] > 0  # feet and seat are touched, MuJoCo overlaps a bit
     header = [c.header for c in table(report).columns]
-    assert {"scene contact", "pen mean mm", "pen max mm"} <= set(header)
+    assert {"scene\ncont", "pen\nmax mm"} <= set(header)
