@@ -13,6 +13,7 @@ SHARED_MOCAP = Path(
 
 # A recipe that trains in a second: human, three-point sensors, tiny networks, 4 environments.
 TINY = """\
+extends: null
 name: tiny
 seed: 7
 character: human

@@ -202,7 +202,7 @@ def test_missing_requirement_is_caught_before_building(tmp_path: Path) -> None:
 
 def test_characters_without_a_recipe_file_get_their_table2_column(tmp_path) -> None:
     """`--character dino|oppy` alone starts from the character's packaged recipe; the human and
-    Jesse keep the default (Jesse's column); a user's recipe file is used as written."""
+    Jesse keep the default (Jesse's column); a user's recipe file is laid over its character's."""
     import torch
 
     from retarget.env.build import env_from_recipe
@@ -224,9 +224,16 @@ def test_characters_without_a_recipe_file_get_their_table2_column(tmp_path) -> N
         r = load(None, registry, shorthands={"character": name}, assignments=[])
         assert "rewards.foot_contact" not in r.components
         assert r.components["rewards.joint_pos"].config.weight == 4.0
-    own = tmp_path / "mine.yaml"
-    own.write_text("character: dino\nrewards:\n  joint_pos: {weight: 3.0}\n")
-    r = load(str(own), registry, shorthands={"character": "dino"}, assignments=[])
+    own = tmp_path / "mine.yaml"  # laid over dino's recipe: only what it says changes
+    own.write_text("character: dino\nrewards:\n  joint_pos: {weight: 3.0}\n  action_min: null\n")
+    r = load(str(own), registry, shorthands={}, assignments=[])
+    rewards = {k.split(".", 1)[1]: c.config for k, c in r.components.items() if "rewards." in k}
+    assert rewards["joint_pos"].weight == 3.0 and rewards["joint_pos"].k == 20.0  # dino's k
+    assert "foot_contact" in rewards and "action_min" not in rewards  # null removes
+    assert "algorithm" in r.components and "terminations.fall" in r.components
+    alone = tmp_path / "alone.yaml"
+    alone.write_text("extends: null\ncharacter: dino\nrewards:\n  joint_pos: {weight: 3.0}\n")
+    r = load(str(alone), registry, shorthands={}, assignments=[])
     assert [k for k in r.components if k.startswith("rewards.")] == ["rewards.joint_pos"]
 
 

@@ -3,8 +3,8 @@
 ``default.yaml`` carries Jesse's column of the paper's Table 2 (a human-like body). Characters
 whose bodies differ from a human's get their own column: ``--character dino`` without a recipe
 file starts from ``dino.yaml`` (likewise ``oppy.yaml``), so the main command trains each body
-with the reward weights the paper gives it. A recipe file given by the user is always used as
-written.
+with the reward weights the paper gives it. A recipe file given by the user is laid over the
+packaged recipe for its character unless it says otherwise (:mod:`retarget.recipe.extends`).
 
 Named packaged recipes are used by name instead of a file: ``retarget train paper`` (the
 paper's torques and Table 3) or ``retarget train teacher --character dino`` (a full-body
@@ -44,6 +44,12 @@ def named_recipe(name: str, character: str | None = None) -> Path | None:
         if own is not None:
             return own
     return packaged_recipe(name)
+
+
+def is_packaged(path: str | Path) -> bool:
+    """Whether ``path`` is one of the packaged recipes (they stand alone)."""
+    folder = Path(str(files("retarget.recipes"))).resolve()
+    return Path(path).resolve().parent == folder
 
 
 def packaged_names() -> list[str]:

@@ -59,6 +59,11 @@ class Recipe(Strict):
         "digits, '.', '_' and '-', so a run is always written inside the runs directory",
         pattern=r"^[A-Za-z0-9._-]{1,100}$",
     )
+    extends: str | None = Field(
+        None,
+        description="the recipe this one is laid over: a packaged name or a file; absent: the "
+        "packaged default for its character; null: stand-alone (resolved recipes say null)",
+    )
     seed: int = Field(0, ge=0, le=2**63 - 1, description="random seed of the run")
     character: ComponentRef
     scene: ComponentRef | None = None

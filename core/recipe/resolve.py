@@ -170,7 +170,8 @@ def load(
     assignments: list[str] | tuple[str, ...] = (),
 ) -> ResolvedRecipe:
     """Read (or take the packaged default), override, validate and resolve a recipe."""
-    from retarget.recipe.defaults import default_recipe_path, named_recipe
+    from retarget.recipe.defaults import default_recipe_path, is_packaged, named_recipe
+    from retarget.recipe.extends import extended
     from retarget.recipe.overrides import apply_overrides
     from retarget.recipe.source import read_recipe_file
 
@@ -180,5 +181,7 @@ def load(
     elif not Path(path).exists() and not Path(path).suffix:
         path = named_recipe(str(path), character) or path
     source = read_recipe_file(path)
+    if not is_packaged(path):  # a user's file starts from the packaged recipe for its body
+        source = extended(source, character)
     source = apply_overrides(source, shorthands=shorthands, assignments=assignments)
     return resolve(source, registry)
