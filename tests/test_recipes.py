@@ -254,3 +254,28 @@ def test_named_packaged_recipes() -> None:
     with pytest.raises(RecipeError, match="not found") as err:
         load("no_such_recipe", registry)
     assert "teacher" in (err.value.hint or "")
+
+
+def test_extends_a_named_recipe_a_file_and_refuses_loops(tmp_path) -> None:
+    from retarget.recipe import load
+    from retarget.registry.loader import load_plugins
+
+    registry = load_plugins()
+    base = tmp_path / "base.yaml"
+    base.write_text("extends: teacher\nname: base\nenv: {num_envs: 8}\n")
+    child = tmp_path / "sub" / "child.yaml"
+    child.parent.mkdir()
+    child.write_text("extends: ../base.yaml\nenv: {reset_lift: 0.05}\n")
+    r = load(str(child), registry, shorthands={}, assignments=[])
+    assert [c.entry.name for c in r.of_kind("sensor")] == ["full_body", "reference_action"]
+    assert r.recipe.env.num_envs == 8 and r.recipe.env.reset_lift == 0.05  # merged, both kept
+    assert r.recipe.name == "base" and r.recipe.extends is None
+    loop_a, loop_b = tmp_path / "a.yaml", tmp_path / "b.yaml"
+    loop_a.write_text("extends: b.yaml\ncharacter: human\n")
+    loop_b.write_text("extends: a.yaml\n")
+    with pytest.raises(RecipeError, match="loops back"):
+        load(str(loop_a), registry, shorthands={}, assignments=[])
+    missing = tmp_path / "m.yaml"
+    missing.write_text("extends: nowhere\ncharacter: human\n")
+    with pytest.raises(RecipeError, match="no such packaged recipe or file"):
+        load(str(missing), registry, shorthands={}, assignments=[])
