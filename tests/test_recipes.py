@@ -279,3 +279,26 @@ def test_extends_a_named_recipe_a_file_and_refuses_loops(tmp_path) -> None:
     missing.write_text("extends: nowhere\ncharacter: human\n")
     with pytest.raises(RecipeError, match="no such packaged recipe or file"):
         load(str(missing), registry, shorthands={}, assignments=[])
+
+
+def test_default_run_names_say_what_differs(tmp_path) -> None:
+    from retarget.cli.train_cmd import _default_name
+    from retarget.recipe import load
+    from retarget.registry.loader import load_plugins
+
+    registry = load_plugins()
+
+    def name(recipe, **shorthands):
+        r = load(recipe, registry, shorthands=shorthands, assignments=[])
+        return _default_name(r, [c.entry.name for c in r.of_kind("sensor")])
+
+    mine = tmp_path / "stairs.yaml"
+    mine.write_text("character: dino\nsensors: [hmd]\n")
+    names = {
+        name(None, character="dino", sensors="hmd"),
+        name(str(mine)),
+        name("paper", character="dino", sensors="hmd"),
+        name(None, character="dino", sensors="hmd", scene="boxes", observers="height_map"),
+    }
+    assert names == {"dino-hmd", "stairs-dino-hmd", "paper-dino-hmd",
+                     "dino-hmd-boxes-height_map"}  # fmt: skip

@@ -6,7 +6,7 @@ import argparse
 import json
 from contextlib import AbstractContextManager, nullcontext
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from retarget.cli.numbers import amount, count
 from retarget.cli.recipe_args import add_recipe_flags, load_from_args
@@ -19,6 +19,9 @@ from retarget.train.run_dir import (
     resolve_run,
     starting_run,
 )
+
+if TYPE_CHECKING:
+    from retarget.recipe import ResolvedRecipe
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -104,6 +107,27 @@ def run_settings(run_dir: Path, given: dict[str, Any], *, resume: bool) -> dict[
     return settings
 
 
+def _default_name(resolved: ResolvedRecipe, sensors: list[str]) -> str:
+    from retarget.recipe.defaults import is_packaged
+
+    character = resolved.character.entry.name
+    stem = Path(resolved.source.path).stem
+    packaged_default = is_packaged(resolved.source.path) and stem in ("default", character)
+
+    def names(kind: str) -> list[str]:
+        return [c.entry.name for c in resolved.of_kind(kind)]
+
+    scenes, algorithms = names("scene"), names("algorithm")
+    return default_run_name(
+        character,
+        sensors,
+        recipe=None if packaged_default else stem.removeprefix(f"{character}_"),
+        scene=scenes[0] if scenes else None,
+        observers=names("observer"),
+        algorithm=algorithms[0] if algorithms else None,
+    )
+
+
 def _resume_recipe(run: Path, registry: Registry, threads: int | None):
     """The run's locked recipe; ``--threads`` (only the speed changes) is recorded in it."""
     from retarget.cli.console import warning
@@ -176,7 +200,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             for c in resolved.of_kind("sensor")
             if "actor" not in groups or c.entry.name in groups["actor"]
         ]
-        name = resolved.recipe.name or default_run_name(resolved.character.entry.name, seen)
+        name = resolved.recipe.name or _default_name(resolved, seen)
         context = starting_run(args.runs_dir, name)  # removed again if the start fails
     with context as run_dir:
         settings = run_settings(run_dir, given, resume=bool(args.resume))

@@ -97,8 +97,27 @@ def latest_checkpoint(run: Path) -> Path:
     return files[-1]
 
 
-def default_run_name(character: str, sensors: list[str]) -> str:
-    return "-".join([character, *sensors]) if sensors else character
+def default_run_name(
+    character: str,
+    sensors: list[str],
+    *,
+    recipe: str | None = None,
+    scene: str | None = None,
+    observers: list[str] | None = None,
+    algorithm: str | None = None,
+) -> str:
+    """What a run is, as its directory name: ``[recipe-]character-sensors[-scene][-observers]
+    [-algorithm]``, so runs of different recipes do not share ``runs/NAME``. ``recipe`` is the
+    recipe file's name (left out for the packaged default), ``scene`` is left out when flat,
+    ``algorithm`` when PPO."""
+    parts = [recipe] if recipe else []
+    parts += [character, *sensors]
+    if scene and scene != "flat":
+        parts.append(scene)
+    parts += observers or []
+    if algorithm and algorithm != "ppo":
+        parts.append(algorithm)
+    return "-".join(parts)[:100]
 
 
 class RunLock:

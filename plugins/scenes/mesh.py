@@ -68,7 +68,8 @@ def load_mesh(cfg: MeshConfig):
     verts = np.asarray(mesh.vertices, dtype=float)
     if cfg.y_up:
         verts = verts[:, [0, 2, 1]] * np.array([1.0, -1.0, 1.0])
-    verts = verts * cfg.scale + np.asarray(cfg.offset)
+    with np.errstate(over="ignore", invalid="ignore"):  # overflow is refused just below
+        verts = verts * cfg.scale + np.asarray(cfg.offset)
     if not np.isfinite(verts).all():
         raise PluginError("the mesh has non-finite vertices", file=path, plugin="scene mesh")
     extent = float(np.ptp(verts, axis=0).max())
