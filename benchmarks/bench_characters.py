@@ -27,6 +27,7 @@ import numpy as np
 from retarget.character import kinematic as km
 from retarget.character.builder import geom_z_extent
 from retarget.motion.import_bvh import load_bvh
+from retarget.motion.shared_data import require_clips, shared_data
 from retarget.plugins.characters.dino import Dino
 from retarget.plugins.characters.human import Human
 from retarget.plugins.characters.jesse import Jesse
@@ -136,10 +137,11 @@ def stability(seconds: float) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--clips", type=Path, default=Path("/work/shared/data/mocap"))
+    parser.add_argument("--clips", type=Path, default=shared_data("mocap"))
     parser.add_argument("--seconds", type=float, default=20.0,
                         help="simulated seconds per stability run")
     args = parser.parse_args(argv)
+    require_clips(args.clips)  # before any work: the data is there
     warnings.simplefilter("ignore")
     table1()
     artefacts(args.clips)

@@ -23,6 +23,7 @@ import torch
 
 from retarget.motion.import_bvh import load_bvh
 from retarget.motion.library import MotionLibrary, window_offsets
+from retarget.motion.shared_data import require_clips, shared_data
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -51,9 +52,10 @@ def control_step_seconds(n: int, threads: int) -> tuple[float, str]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--clips", type=Path, default=REPO / ".." / "shared" / "data" / "mocap")
+    parser.add_argument("--clips", type=Path, default=shared_data("mocap"))
     parser.add_argument("--threads", type=int, default=0, help="physics threads (0: all)")
     args = parser.parse_args()
+    require_clips(args.clips)  # before any work: the data is there
     torch.set_num_threads(max(1, torch.get_num_threads()))
 
     files = sorted(args.clips.glob("*.bvh"))

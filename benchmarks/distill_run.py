@@ -28,6 +28,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from retarget.errors import require_extra
+
 HELD_OUT = {
     "heldout_walk": ["cmu_131_01_walk_start_stop"],
     "heldout_jog": ["bandai_d2_run_exhausted_003"],
@@ -178,6 +180,7 @@ def main() -> None:
     parser.add_argument("--marks", type=float, nargs="+", default=[0.1, 0.2, 0.3, 0.5, 1.0],
                         help="compare: millions of environment steps")
     args = parser.parse_args()
+    require_extra("bench", "matplotlib", needed_for="the learning-curve pictures")
     out = Path(args.out)
     if args.stage == "teacher":
         train(args, ["teacher", "--character", args.character], f"{args.character}-teacher")

@@ -23,12 +23,14 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import os
 import subprocess
 import sys
 from pathlib import Path
 
 import yaml
+
+from retarget.errors import require_extra
+from retarget.motion.shared_data import require_clips, shared_data
 
 TRAIN = [
     "bandai_d2_walk_normal_020",
@@ -46,8 +48,10 @@ REPO = Path(__file__).resolve().parents[1]
 
 
 def shared_mocap() -> Path:
-    default = REPO.parent / "shared" / "data" / "mocap"
-    return Path(os.environ.get("RETARGET_SHARED_DATA", default))
+    """The shared clips, checked before any work starts."""
+    folder = shared_data("mocap")
+    require_clips(folder)
+    return folder
 
 
 def link_clips(out: Path, split: dict[str, list[str]]) -> dict[str, Path]:
@@ -154,6 +158,7 @@ def main() -> None:
     parser.add_argument("--marks", type=float, nargs="+", default=[0.5, 1, 2, 3, 4],
                         help="--compare: millions of environment steps")
     args = parser.parse_args()
+    require_extra("bench", "matplotlib", needed_for="the learning-curve pictures")
     out = Path(args.out)
     if args.compare:
         print(compare([Path(p) for p in args.compare], args.marks))

@@ -34,6 +34,8 @@ from pathlib import Path
 
 from learning_run import link_split, plot, retarget
 
+from retarget.errors import require_extra
+
 SPLITS = ("train", "walk_heldout")
 VARIANTS = {"height_map": ["--observers", "height_map"], "blind": []}
 COLUMNS = (
@@ -131,6 +133,7 @@ def main() -> None:
     parser.add_argument("--max-seconds", type=float, default=30.0, help="eval: run length")
     parser.add_argument("--eval-envs", type=int, default=64, help="eval: runs batched together")
     args = parser.parse_args()
+    require_extra("bench", "matplotlib", needed_for="the learning-curve pictures")
     out = Path(args.out)
     dirs = link_split(out)
     runs = labelled_runs(args.runs) if args.runs else train(args, dirs["train"])

@@ -60,3 +60,27 @@ class MotionError(RetargetError):
 
 class SimulationError(RetargetError):
     """The physics went non-finite or a model could not be compiled."""
+
+
+class MissingExtra(RetargetError):
+    """An optional feature's packages are not installed; names the extra that installs them."""
+
+
+def require_extra(extra: str, *modules: str, needed_for: str) -> None:
+    """Raise :class:`MissingExtra` before any work starts when one of ``modules`` is missing:
+    one message shape for every extra (``pip install 'retarget[EXTRA]'``)."""
+    import importlib.util
+
+    missing = []
+    for module in modules:
+        try:
+            found = importlib.util.find_spec(module) is not None
+        except (ImportError, ValueError):
+            found = False
+        if not found:
+            missing.append(module)
+    if missing:
+        raise MissingExtra(
+            f"{needed_for} needs {', '.join(missing)}, which is not installed",
+            hint=f"pip install 'retarget[{extra}]'",
+        )

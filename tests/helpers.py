@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
 
+from retarget.motion.shared_data import shared_data
+
 REPO = Path(__file__).resolve().parents[1]
-SHARED_MOCAP = Path(
-    os.environ.get("RETARGET_SHARED_DATA", str(REPO.parent / "shared" / "data" / "mocap"))
-)
+SHARED_MOCAP = shared_data("mocap")
 
 # A recipe that trains in a second: human, three-point sensors, tiny networks, 4 environments.
 TINY = """\

@@ -173,3 +173,25 @@ def test_an_unexpected_failure_is_one_line_and_a_traceback_file(monkeypatch, cap
     assert "Traceback" not in err
     saved = err.split("traceback is in ")[1].split()[0]
     assert "ZeroDivisionError" in Path(saved).read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize(
+    ("argv", "extra"),
+    [
+        (["export", "runs/none/latest", "--onnx"], "export"),
+        (["play", "runs/none/latest", "--out", "x.mp4"], "video"),
+        (["motion", "show", "clip.bvh", "--out", "x.mp4"], "video"),
+    ],
+)
+def test_missing_extras_are_named_before_any_work(argv, extra, monkeypatch, capsys) -> None:
+    import importlib.util
+
+    real = importlib.util.find_spec
+    absent = {"onnx", "imageio", "imageio_ffmpeg"}
+    monkeypatch.setattr(
+        importlib.util, "find_spec", lambda name, *a: None if name in absent else real(name, *a)
+    )
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert f"pip install 'retarget[{extra}]'" in err  # not "no run" / "file not found"
+    assert "not installed" in err and "Traceback" not in err

@@ -32,21 +32,24 @@ def test_mp4_round_trip(tmp_path: Path) -> None:
     assert back[5, 12:24, 22:34].mean() > 200 and back[5, 30:, :].mean() < 30
 
 
-def test_gif_round_trip(tmp_path: Path) -> None:
+def test_gif_plays_in_real_time(tmp_path: Path) -> None:
     from PIL import Image, ImageSequence
 
     path = tmp_path / "clip.gif"
-    save_video(frames(), path, fps=36.0)
+    written = save_video(frames(72), path, fps=36.0)  # two seconds at the control rate
     with Image.open(path) as im:
         assert im.size == (64, 48)
-        assert sum(1 for _ in ImageSequence.Iterator(im)) == 12
+        delays = [f.info["duration"] for f in ImageSequence.Iterator(im)]
+    assert all(d % 10 == 0 for d in delays)  # whole centiseconds, as GIF stores them
+    assert abs(sum(delays) / 1000 - 2.0) < 0.05, sum(delays)  # plays for the clip's 2 s
+    assert written == "67 frames at 33.3 fps, real time"  # (identical frames merge in the file)
 
 
 def test_png_is_a_sheet_of_evenly_spaced_frames(tmp_path: Path) -> None:
     from PIL import Image
 
     path = tmp_path / "rollout.png"
-    save_video(frames(), path, fps=36.0)
+    assert save_video(frames(), path, fps=36.0) == "8-frame sheet of 12 frames"
     sheet = np.asarray(Image.open(path).convert("RGB"))
     assert sheet.shape == (2 * 48 + 4, 4 * 64 + 3 * 4, 3)  # 8 frames, 4 columns, 4 px gaps
     first, last = sheet[:48, :64], sheet[52:, 3 * 68 :]

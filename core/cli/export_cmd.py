@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from retarget.errors import RetargetError
+from retarget.errors import RetargetError, require_extra
 from retarget.registry import Registry
 
 
@@ -25,6 +25,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     from retarget.train.load import load_run
     if not args.onnx:
         raise RetargetError("choose a format", hint="retarget export RUN --onnx")
+    require_extra("export", "onnx", needed_for="retarget export --onnx")
     loaded = load_run(args.run, registry, num_envs=1, checkpoint=args.checkpoint)
     env = loaded.env
     group, _ = policy_of(loaded.algorithm)

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 from retarget.cli.numbers import amount, count
 from retarget.cli.run_changes import add_run_change_args
-from retarget.errors import RetargetError
+from retarget.errors import RetargetError, require_extra
 from retarget.registry import Registry
 from retarget.train.run_dir import resolve_run
 
@@ -94,6 +94,8 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         width, height = (int(v) for v in args.size.lower().split("x"))
     except ValueError:
         raise RetargetError(f"--size expects WIDTHxHEIGHT, got '{args.size}'") from None
+    if Path(args.out).suffix.lower() == ".mp4":  # named before anything is rendered
+        require_extra("video", "imageio", "imageio_ffmpeg", needed_for="writing .mp4")
     if args.input and args.motions:
         raise RetargetError("give --input RECORDING or --motions CLIP, not both")
     stream = read_recording(args.input) if args.input else None
@@ -126,6 +128,6 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     count = min(len(v) for v in views)
     frames = [np.concatenate([v[i] for v in views], axis=1) for i in range(count)]
     out_path = Path(args.out)
-    save_video(frames, out_path, fps=36.0)
-    out.print(f"wrote {out_path} ({count} frames)")
+    written = save_video(frames, out_path, fps=float(env.sim.settings.control_hz))
+    out.print(f"wrote {out_path} ({written})")
     return 0

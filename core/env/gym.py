@@ -18,7 +18,12 @@ try:
     import gymnasium
     from gymnasium.vector import AutoresetMode, VectorEnv
 except ImportError as exc:  # pragma: no cover - exercised only without the extra
-    raise ImportError("retarget.env.gym needs gymnasium: pip install 'retarget[gym]'") from exc
+    from retarget.errors import MissingExtra
+
+    raise MissingExtra(
+        "retarget.env.gym needs gymnasium, which is not installed",
+        hint="pip install 'retarget[gym]'",
+    ) from exc
 
 from retarget.env.env import RetargetEnv
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from retarget.errors import RetargetError
+from retarget.errors import RetargetError, require_extra
 from retarget.render.gl import ensure_offscreen
 
 FLOOR_RGBA = (0.82, 0.84, 0.86, 1.0)
@@ -154,7 +154,20 @@ SHEET_FRAMES = 8
 """Frames in the picture a ``.png`` output of a rollout or clip gets."""
 
 
-def save_video(frames: Sequence[np.ndarray], path: Path, fps: float) -> None:
+def gif_timing(count: int, fps: float) -> tuple[list[int], int]:
+    """Which of ``count`` frames at ``fps`` a GIF keeps, and its frame delay in centiseconds.
+
+    GIF delays are whole centiseconds (and players slow anything under 2 cs to 10 cs), so 36
+    fps cannot be stored as is; frames are picked at the nearest representable rate so the
+    GIF plays in real time rather than 1.4x too fast.
+    """
+    delay = max(2, round(100 / fps))
+    step = fps * delay / 100.0  # source frames per GIF frame
+    picks = [round(k * step) for k in range(int((count - 1) / step) + 1)]
+    return [min(i, count - 1) for i in picks], delay
+
+
+def save_video(frames: Sequence[np.ndarray], path: Path, fps: float) -> str:
     """GIF via Pillow, MP4 via imageio-ffmpeg if installed, PNG = a sheet of up to
     ``SHEET_FRAMES`` evenly spaced frames (what a rollout did, at a glance)."""
     suffix = path.suffix.lower()
@@ -164,28 +177,18 @@ def save_video(frames: Sequence[np.ndarray], path: Path, fps: float) -> None:
         picks = np.linspace(0, len(frames) - 1, min(SHEET_FRAMES, len(frames))).round()
         chosen = np.stack([frames[int(i)] for i in picks])
         save_image(contact_sheet(chosen, columns=min(4, len(chosen))), path)
-        return
+        return f"{len(chosen)}-frame sheet of {len(frames)} frames"
     if suffix == ".gif":
-        try:
-            from PIL import Image
-        except ImportError as exc:
-            raise RetargetError(
-                "writing .gif needs Pillow (pip install pillow)", file=path
-            ) from exc
-        imgs = [Image.fromarray(f) for f in frames]
-        imgs[0].save(
-            path, save_all=True, append_images=imgs[1:], duration=round(1000 / fps), loop=0
-        )
-        return
+        from PIL import Image
+
+        picks, delay = gif_timing(len(frames), fps)
+        imgs = [Image.fromarray(frames[i]) for i in picks]
+        imgs[0].save(path, save_all=True, append_images=imgs[1:], duration=delay * 10, loop=0)
+        return f"{len(imgs)} frames at {100 / delay:.1f} fps, real time"
     if suffix == ".mp4":
-        try:
-            import imageio.v3 as iio
-        except ImportError as exc:
-            raise RetargetError(
-                "writing .mp4 needs imageio with ffmpeg (pip install imageio imageio-ffmpeg)",
-                file=path,
-                hint="or write a .gif, which needs only Pillow",
-            ) from exc
+        require_extra("video", "imageio", "imageio_ffmpeg", needed_for="writing .mp4")
+        import imageio.v3 as iio
+
         iio.imwrite(path, np.stack(frames), fps=fps, codec="libx264")
-        return
+        return f"{len(frames)} frames at {fps:.0f} fps"
     raise RetargetError(f"unknown output format {suffix!r}; use .png, .gif or .mp4", file=path)

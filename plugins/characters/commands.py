@@ -80,9 +80,10 @@ class CharacterCommand(Command):
         else:
             info = retarget_video(character, _read_clip(args.clip), args.out, width, height,
                                   seconds=args.seconds, start=args.start, fps=args.fps)
-            print(f"{character.name}: {info['frames']} frames, root scale "
-                  f"{info['root_scale']:.3f}, joint-limit clipping {100 * info['clip_rate']:.2f}%"
-                  f" of mapped angles")
+            print(f"{character.name}: root scale {info['root_scale']:.3f}, joint-limit "
+                  f"clipping {100 * info['clip_rate']:.2f}% of mapped angles")
+            print(f"wrote {args.out} ({info['written']})")
+            return 0
         print(f"wrote {args.out}")
         return 0
 
@@ -160,8 +161,8 @@ def retarget_video(character: Any, clip: Any, out: Path, width: int, height: int
             cam.lookat[:2] = (qh[:2] + qc[:2]) / 2
             frames.append(cv.label(render(data, cam), [(0.5, 0.06, f"human  |  {character.name}"
                                                         " (kinematic retarget)")]))
-    cv.save_video(frames, out, fps)
-    return {"frames": float(len(frames)), "root_scale": c_motion.root_scale,
+    written = cv.save_video(frames, out, fps)
+    return {"written": written, "frames": float(len(frames)), "root_scale": c_motion.root_scale,
             "clip_rate": c_motion.clip_rate}
 
 

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import retarget
 from retarget import Command, MotionError, RetargetError
+from retarget.errors import require_extra
 
 if TYPE_CHECKING:
     from retarget.motion.clip import MotionClip
@@ -143,6 +144,8 @@ class MotionCommand(Command):
         suffix = out.suffix.lower()
         if suffix not in (".png", ".mp4"):
             raise RetargetError(f"--out must end in .png or .mp4, got '{out.name}'")
+        if suffix == ".mp4":  # named before any clip is read or rendered
+            require_extra("video", "imageio_ffmpeg", needed_for="writing .mp4")
         clip = _read(args.file, args)
         first = int(np.clip(round(args.start * clip.fps), 0, clip.num_frames - 1))
         last = (
@@ -155,14 +158,10 @@ class MotionCommand(Command):
             frames = np.linspace(first, last, count).round().astype(int)
             images = render_frames(clip, frames, width=args.size, height=args.size, view=args.view)
             write_png(out, contact_sheet(images, columns=min(4, count)))
+            what = f"{count}-frame sheet of {last - first + 1} frames"
         else:
-            try:
-                import imageio_ffmpeg
-            except ImportError:
-                raise RetargetError(
-                    "writing .mp4 needs the optional package imageio-ffmpeg",
-                    hint="pip install imageio-ffmpeg, or write a .png frame grid instead",
-                ) from None
+            import imageio_ffmpeg
+
             step = max(1, round(clip.fps / 30.0))
             frames = np.arange(first, last + 1, step)
             images = render_frames(clip, frames, width=args.size, height=args.size, view=args.view)
@@ -173,7 +172,8 @@ class MotionCommand(Command):
             for img in images:
                 writer.send(np.ascontiguousarray(img))
             writer.close()
-        print(f"wrote {out}")
+            what = f"{len(images)} frames at {clip.fps / step:.0f} fps"
+        print(f"wrote {out} ({what})")
         return 0
 
 

@@ -3,20 +3,17 @@
 from __future__ import annotations
 
 import csv
-import os
 from pathlib import Path
 
 import pytest
+
+from retarget.motion.shared_data import shared_data
 
 REPO = Path(__file__).resolve().parents[2]
 
 
 def shared_mocap_dir() -> Path:
-    env = os.environ.get("RETARGET_SHARED_DATA")
-    if env:
-        p = Path(env)
-        return p / "mocap" if (p / "mocap").is_dir() else p
-    return (REPO / ".." / "shared" / "data" / "mocap").resolve()
+    return shared_data("mocap")
 
 
 @pytest.fixture(scope="session")
