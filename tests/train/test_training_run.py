@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from helpers import TINY, assert_state_equal
+from helpers import REPO, TINY, assert_state_equal
 
 from retarget.cli.main import main
 from retarget.recipe import load
@@ -150,8 +150,6 @@ def test_export_onnx_matches_torch(recipe: Path, tmp_path: Path) -> None:
     ort = pytest.importorskip("onnxruntime")
     import json
 
-    import numpy as np
-
     from retarget.train.load import load_run
 
     assert main(["train", str(recipe), "--steps", str(2 * SAMPLES), "--runs-dir", str(tmp_path),
@@ -212,24 +210,24 @@ def test_logs_reward_terms_terminations_and_resume_drops_redone_rows(
     assert [float(r["iteration"]) for r in rows(first.run)] == [1.0, 2.0, 3.0, 4.0]
 
 
-def test_play_from_a_recorded_device_stream(recipe: Path, tmp_path: Path) -> None:
-    from retarget.motion.device_recording import DeviceRecording, write_recording
-    from retarget.motion.devices import device_poses
-    from retarget.motion.procedural import default_motions
+def test_play_from_the_shipped_device_recording(recipe: Path, tmp_path: Path) -> None:
+    """examples/recordings/walk_openxr.jsonl (OpenXR convention, a headset clock, a dropout)
+    drives a trained run, and is exactly what its generator script writes."""
+    import importlib.util
 
+    from retarget.motion.device_recording import write_recording
+
+    path = REPO / "examples" / "recordings" / "walk_openxr.jsonl"
+    spec = importlib.util.spec_from_file_location("make_sample", path.with_name("make_sample.py"))
+    maker = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(maker)
+    again = write_recording(tmp_path / "again.jsonl", maker.sample(), convention="openxr")
+    assert again.read_text() == path.read_text(), "regenerate: python " + str(spec.origin)
     assert main(["train", str(recipe), "--steps", str(SAMPLES), "--runs-dir", str(tmp_path),
                  "--no-tensorboard"]) == 0  # fmt: skip
-    walk = next(c for c in default_motions() if c.name.startswith("walk"))
-    poses = device_poses(walk.global_pos, walk.global_rot, walk.height)[:40]
-    times = 100.0 + np.arange(len(poses)) / walk.fps  # a headset clock, not starting at 0
-    tracked = np.ones(poses.shape[:2], bool)
-    tracked[5:9, 1] = False
-    path = write_recording(
-        tmp_path / "rec.jsonl", DeviceRecording(times, poses, tracked), convention="openxr"
-    )
     video = tmp_path / "rec.gif"
     rc = main(["play", str(tmp_path / "tiny" / "latest"), "--input", str(path),
-               "--out", str(video), "--size", "96x72"])  # fmt: skip
+               "--out", str(video), "--size", "96x72", "--seconds", "1"])  # fmt: skip
     assert rc == 0
     assert video.stat().st_size > 1000
     # --input and --motions together is a user error
