@@ -25,9 +25,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def run_validate(args: argparse.Namespace, registry: Registry) -> int:
     from retarget.cli.console import out
+    from retarget.sim.world import build_world
+
     resolved = load_from_args(args, registry)
+    made = {path: comp.instantiate() for path, comp in resolved.components.items()}
+    build_world(made["character"], made.get("scene"))  # the character and scene compile together
     n = len(resolved.components)
-    out.print(f"[green]ok[/]: {resolved.source.path} ({n} components)")
+    out.print(f"[green]ok[/]: {resolved.source.path} ({n} components, the world compiles)")
     return 0
 
 

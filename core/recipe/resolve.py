@@ -12,7 +12,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
-from retarget.errors import PluginError, RecipeError
+from retarget.errors import PluginError, RecipeError, RetargetError
 from retarget.kinds import Character, Plugin, PluginConfig
 from retarget.recipe.errors import from_validation
 from retarget.recipe.model import SLOTS, ComponentRef, Recipe
@@ -31,6 +31,8 @@ class Component:
     def instantiate(self) -> Plugin:
         try:
             return self.entry.cls(self.config)
+        except RetargetError:  # already names the file, field or plugin
+            raise
         except Exception as exc:
             raise PluginError(
                 f"constructor raised {type(exc).__name__}: {exc}",
