@@ -195,3 +195,23 @@ def test_missing_extras_are_named_before_any_work(argv, extra, monkeypatch, caps
     err = capsys.readouterr().err
     assert f"pip install 'retarget[{extra}]'" in err  # not "no run" / "file not found"
     assert "not installed" in err and "Traceback" not in err
+
+
+def test_every_option_and_argument_of_every_command_has_a_help_line() -> None:
+    import argparse
+
+    from retarget.cli.main import build_parser
+    from retarget.registry.loader import load_plugins
+
+    silent = []
+
+    def walk(parser: argparse.ArgumentParser, path: list[str]) -> None:
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for name, sub in action.choices.items():
+                    walk(sub, [*path, name])
+            elif not action.help and action.dest != "help":
+                silent.append(f"{' '.join(path)} {action.dest}")
+
+    walk(build_parser(load_plugins()), ["retarget"])
+    assert not silent, silent

@@ -17,7 +17,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     validate.set_defaults(handler=run_validate)
     show = nested.add_parser("show", help="print the recipe with every default filled in")
     add_recipe_flags(show)
-    show.add_argument("--format", choices=("yaml", "json"), default="yaml")
+    show.add_argument(
+        "--format", choices=("yaml", "json"), default="yaml", help="output format"
+    )
     show.set_defaults(handler=run_show)
     schema = nested.add_parser("schema", help="JSON Schema of recipes (installed plugins)")
     schema.set_defaults(handler=run_schema)

@@ -64,7 +64,8 @@ class CharacterCommand(Command):
         ret.add_argument("clip", type=Path, help="motion file (.bvh)")
         ret.add_argument("--character", required=True, help="character plugin name")
         ret.add_argument("--out", type=Path, required=True, help="output (.gif, .mp4 or .png)")
-        ret.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+        ret.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                         help="character config field, e.g. --set tail=passive")
         ret.add_argument("--seconds", type=float, default=6.0, help="length to render")
         ret.add_argument("--start", type=float, default=0.0, help="start time in the clip, s")
         ret.add_argument("--fps", type=float, default=15.0, help="frame rate of the output")

@@ -49,9 +49,9 @@ class MotionCommand(Command):
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
         sub = parser.add_subparsers(dest="motion_action", metavar="ACTION", required=True)
         inspect = sub.add_parser("inspect", help="table of clip facts")
-        inspect.add_argument("files", nargs="+", metavar="FILE")
+        inspect.add_argument("files", nargs="+", metavar="FILE", help="motion files to describe")
         show = sub.add_parser("show", help="render a clip to .png (frame grid) or .mp4")
-        show.add_argument("file", metavar="FILE")
+        show.add_argument("file", metavar="FILE", help="the motion file to draw")
         show.add_argument("--out", required=True, help="output .png or .mp4")
         show.add_argument("--frames", type=int, default=8, help="frames in a .png grid")
         show.add_argument("--size", type=int, default=320, help="pixels per frame")
