@@ -202,7 +202,8 @@ CASES = [
     _bvh("value_nan", BVH.replace("0 90 1 0 0 5", "0 90 1 0 nan 5")),
     _bvh("truncated", BVH[: len(BVH) // 2]),
     _bvh("binary", b"\x00\x01\x02HIERARCHY\xff"),
-    _bvh("joints_huge", "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\n" + "JOINT B\n{\nOFFSET 0 1 0\n"
+    _bvh("joints_huge", "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 3 Zrotation Xrotation "
+         "Yrotation\n" + "JOINT B\n{\nOFFSET 0 1 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n"
          * 3000),
     # device recordings
     _recording("gap_huge", [HEADER, f'{{"t": 0, "hmd": {POSE}}}', f'{{"t": 1e9, "hmd": {POSE}}}']),

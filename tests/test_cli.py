@@ -215,3 +215,12 @@ def test_every_option_and_argument_of_every_command_has_a_help_line() -> None:
 
     walk(build_parser(load_plugins()), ["retarget"])
     assert not silent, silent
+
+
+@pytest.mark.parametrize("size", ["0x0", "100000x10", "big"])
+def test_picture_sizes_are_bounded_before_any_work(size, capsys) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["play", "runs/none/latest", "--out", "x.gif", "--size", size])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "--size" in err and ("16..4096" in err or "WIDTHxHEIGHT" in err)

@@ -43,3 +43,22 @@ def amount(
 
     parse.__name__ = "number"
     return parse
+
+
+MIN_PIXELS, MAX_PIXELS = 16, 4096
+"""Picture sizes accepted (each side): an offscreen context of 0 or 100k pixels fails deep in
+OpenGL."""
+
+
+def image_size(text: str) -> tuple[int, int]:
+    """``WIDTHxHEIGHT`` with each side in ``[MIN_PIXELS, MAX_PIXELS]``."""
+    try:
+        width, height = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expects WIDTHxHEIGHT, got '{text}'") from None
+    for side in (width, height):
+        if not MIN_PIXELS <= side <= MAX_PIXELS:
+            raise argparse.ArgumentTypeError(
+                f"{width}x{height}: each side is {MIN_PIXELS}..{MAX_PIXELS} pixels"
+            )
+    return width, height

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from retarget.cli.numbers import amount, count
+from retarget.cli.numbers import amount, count, image_size
 from retarget.cli.run_changes import add_run_change_args
 from retarget.errors import RetargetError, require_extra
 from retarget.registry import Registry
@@ -35,7 +35,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default=0.0,
         help="start time in the clip, s",
     )
-    parser.add_argument("--size", default="480x360", help="WIDTHxHEIGHT of each view")
+    parser.add_argument(
+        "--size", type=image_size, default="480x360", help="WIDTHxHEIGHT of each view"
+    )
     parser.add_argument("--ghost-offset", type=float, default=0.0, help="ghost shift, m")
     parser.add_argument(
         "--azimuth",
@@ -90,10 +92,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     from retarget.render.character_view import label, save_video
     from retarget.render.policy_video import render_rollout
     from retarget.train.load import load_run
-    try:
-        width, height = (int(v) for v in args.size.lower().split("x"))
-    except ValueError:
-        raise RetargetError(f"--size expects WIDTHxHEIGHT, got '{args.size}'") from None
+    width, height = args.size
     if Path(args.out).suffix.lower() == ".mp4":  # named before anything is rendered
         require_extra("video", "imageio", "imageio_ffmpeg", needed_for="writing .mp4")
     if args.input and args.motions:

@@ -40,6 +40,7 @@ TOOLKIT: dict[str, str] = {
     "retarget.train.load": "loading a trained run (recipe lock, algorithm, weights)",
     "retarget.train.run_dir": "run directories: resolving, latest checkpoint, lock file name",
     "retarget.cli.recipe_args": "the recipe argument and override flags for command plugins",
+    "retarget.cli.numbers": "bounded number and picture-size flags for command plugins",
     "retarget.render.*": "offscreen pictures and videos of characters, clips and rollouts",
     "retarget.testing.*": "the contract suite and its test doubles",
 }

@@ -15,6 +15,7 @@ from typing import Any
 import retarget
 from retarget import Command, RetargetError
 from retarget.character.builder import geom_z_extent
+from retarget.cli.numbers import image_size
 
 
 def _parse_sets(pairs: list[str]) -> dict[str, Any]:
@@ -59,7 +60,8 @@ class CharacterCommand(Command):
         show.add_argument("--out", type=Path, required=True, help="output image (.png)")
         show.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                           help="character config field, e.g. --set tail=fixed")
-        show.add_argument("--size", default="960x720", help="WIDTHxHEIGHT in pixels")
+        show.add_argument("--size", type=image_size, default="960x720",
+                          help="WIDTHxHEIGHT in pixels")
         ret = sub.add_parser("retarget", help="render a clip beside its kinematic retarget")
         ret.add_argument("clip", type=Path, help="motion file (.bvh)")
         ret.add_argument("--character", required=True, help="character plugin name")
@@ -69,10 +71,11 @@ class CharacterCommand(Command):
         ret.add_argument("--seconds", type=float, default=6.0, help="length to render")
         ret.add_argument("--start", type=float, default=0.0, help="start time in the clip, s")
         ret.add_argument("--fps", type=float, default=15.0, help="frame rate of the output")
-        ret.add_argument("--size", default="800x480", help="WIDTHxHEIGHT in pixels")
+        ret.add_argument("--size", type=image_size, default="800x480",
+                         help="WIDTHxHEIGHT in pixels")
 
     def run(self, args: argparse.Namespace) -> int:
-        width, height = (int(v) for v in args.size.lower().split("x"))
+        width, height = args.size
         character = _character(args.name if args.character_command == "show"
                                else args.character, _parse_sets(args.set))
         args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 import retarget
 from retarget import Command, MotionError, RetargetError
+from retarget.cli.numbers import MAX_PIXELS, MIN_PIXELS, count
 from retarget.errors import require_extra
 
 if TYPE_CHECKING:
@@ -54,7 +55,8 @@ class MotionCommand(Command):
         show.add_argument("file", metavar="FILE", help="the motion file to draw")
         show.add_argument("--out", required=True, help="output .png or .mp4")
         show.add_argument("--frames", type=int, default=8, help="frames in a .png grid")
-        show.add_argument("--size", type=int, default=320, help="pixels per frame")
+        show.add_argument("--size", type=count(MIN_PIXELS, MAX_PIXELS), default=320,
+                          help="pixels per frame (square)")
         show.add_argument("--start", type=float, default=0.0, help="first second to show")
         show.add_argument("--end", type=float, default=None, help="last second to show")
         show.add_argument(
