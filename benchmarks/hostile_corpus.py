@@ -203,8 +203,8 @@ CASES = [
     _bvh("truncated", BVH[: len(BVH) // 2]),
     _bvh("binary", b"\x00\x01\x02HIERARCHY\xff"),
     _bvh("joints_huge", "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 3 Zrotation Xrotation "
-         "Yrotation\n" + "JOINT B\n{\nOFFSET 0 1 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n"
-         * 3000),
+         "Yrotation\n" + "".join(f"JOINT B{k}\n{{\nOFFSET 0 1 0\nCHANNELS 3 Zrotation "
+                                  "Xrotation Yrotation\n" for k in range(3000))),
     # device recordings
     _recording("gap_huge", [HEADER, f'{{"t": 0, "hmd": {POSE}}}', f'{{"t": 1e9, "hmd": {POSE}}}']),
     _recording("position_nan", [HEADER, '{"t": 0, "hmd": [NaN, 1.6, 0, 1, 0, 0, 0]}']),
