@@ -35,7 +35,7 @@ _SCENE = """
   </asset>
   <worldbody>
     <light pos="0 0 6" dir="0 0 -1" directional="true" diffuse="0.6 0.6 0.6"/>
-    <geom type="plane" size="40 40 0.1" material="grid" rgba="0.8 0.8 0.8 1"/>
+    <geom type="plane" size="40 40 5" material="grid" rgba="0.8 0.8 0.8 1"/>
   </worldbody>
 </mujoco>
 """

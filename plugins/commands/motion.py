@@ -54,7 +54,12 @@ class MotionCommand(Command):
         show = sub.add_parser("show", help="render a clip to .png (frame grid) or .mp4")
         show.add_argument("file", metavar="FILE", help="the motion file to draw")
         show.add_argument("--out", required=True, help="output .png or .mp4")
-        show.add_argument("--frames", type=int, default=8, help="frames in a .png grid")
+        show.add_argument("--frames", type=count(1, 64), default=8, help="frames in a .png grid")
+        show.add_argument(
+            "--cameras",
+            choices=("quest2", "aria"),
+            help="draw what a headset's cameras see instead (.png: a row of views per frame)",
+        )
         show.add_argument("--size", type=count(MIN_PIXELS, MAX_PIXELS), default=320,
                           help="pixels per frame (square)")
         show.add_argument("--start", type=float, default=0.0, help="first second to show")
@@ -155,6 +160,16 @@ class MotionCommand(Command):
             if args.end is None
             else int(np.clip(round(args.end * clip.fps), first, clip.num_frames - 1))
         )
+        if args.cameras:
+            if suffix != ".png":
+                raise RetargetError("--cameras draws a .png sheet", hint="use --out views.png")
+            shown = max(1, min(args.frames, last - first + 1))
+            picks = np.linspace(first, last, shown).round().astype(int)
+            views = _camera_views(clip, picks, args.cameras, args.size)
+            write_png(out, contact_sheet(views, columns=views.shape[0] // shown))
+            print(f"wrote {out} ({shown} frames x {views.shape[0] // shown} {args.cameras} "
+                  f"cameras, of {last - first + 1} frames)")
+            return 0
         if suffix == ".png":
             count = max(1, min(args.frames, last - first + 1))
             frames = np.linspace(first, last, count).round().astype(int)
@@ -182,3 +197,20 @@ class MotionCommand(Command):
 @retarget.hookimpl
 def register_commands(register) -> None:
     register(MotionCommand)
+
+
+def _camera_views(clip, picks, rig_name: str, size: int):
+    """``(K * C, H, W, 3)`` grayscale views of the rig's cameras at frames ``picks``."""
+    import numpy as np
+
+    from retarget.motion.devices import device_poses
+    from retarget.render.ego import EgoRenderer
+    from retarget.render.ego_rigs import RIGS
+
+    rig = RIGS[rig_name]
+    headsets = device_poses(clip.global_pos, clip.global_rot, clip.height)[:, 0]
+    width, height = size, max(16, size * 3 // 4)
+    with EgoRenderer(rig, width, height) as render:
+        views = [render(clip.global_pos[f], headsets[f], clip.height) for f in picks]
+    gray = np.concatenate(views)  # (K * C, H, W)
+    return np.repeat(gray[..., None], 3, axis=-1)

@@ -68,3 +68,17 @@ def test_show_rejects_unknown_output(tmp_path: Path):
     sample = Bvh.write_sample(tmp_path)
     with pytest.raises(RetargetError, match=r"\.png or \.mp4"):
         MotionCommand().run(_args("show", str(sample), "--out", str(tmp_path / "x.gif")))
+
+
+def test_show_cameras_draws_a_row_of_headset_views_per_frame(tmp_path: Path, capsys):
+    sample = Bvh.write_sample(tmp_path)
+    out = tmp_path / "views.png"
+    assert MotionCommand().run(_args("show", str(sample), "--out", str(out), "--frames", "2",
+                                     "--size", "64", "--cameras", "quest2")) == 0  # fmt: skip
+    img = _read_png(out)
+    assert img.shape == (2 * 48 + 4, 4 * 64 + 3 * 4, 3)  # 2 frames x 4 cameras of 64x48
+    assert np.array_equal(img[..., 0], img[..., 2])  # grayscale views
+    assert "2 frames x 4 quest2 cameras" in capsys.readouterr().out
+    with pytest.raises(RetargetError, match=r"--cameras draws a \.png"):
+        MotionCommand().run(_args("show", str(sample), "--out", str(tmp_path / "v.mp4"),
+                                  "--cameras", "aria"))  # fmt: skip
