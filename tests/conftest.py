@@ -39,3 +39,11 @@ def make_dist(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Callable[..., 
     yield make
     for name in [m for m in sys.modules if m.endswith(f"_{suffix}")]:
         del sys.modules[name]
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _image_cache(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """Camera images rendered by tests go to a session folder, not the user's cache."""
+    import os
+
+    os.environ.setdefault("RETARGET_CACHE", str(tmp_path_factory.mktemp("retarget-cache")))

@@ -81,12 +81,15 @@ class RetargetEnv:
         self.sensors, self.observers = list(sensors), list(observers)
         for plugin in (*self.sensors, *self.observers):
             plugin.bind(layout)
+            plugin.prepare(self.library)
         self.rewards = RewardManager(rewards or {}, n)
         for term in self.rewards.terms.values():
             term.bind(layout)
+            term.prepare(self.library)
         self.terminations = TerminationManager(terminations or {})
         for term in self.terminations.terms.values():
             term.bind(layout)
+            term.prepare(self.library)
         past = max([s.frames_needed()[0] for s in self.sensors] + [0])
         future = max([s.frames_needed()[1] for s in self.sensors] + [0])
         self.window_offsets = tuple(range(-past, future + 1))
@@ -198,6 +201,7 @@ class RetargetEnv:
             window_offsets=self.window_offsets,
             contacts=lib.contacts[rows],
             future=ahead,
+            rows=rows,
             scene_contacts=self.reference.scene_contacts[rows] if need.scene_contacts else None,
         )
         return StepContext(

@@ -129,6 +129,9 @@ class ReferenceBatch:
     future: Mapping[int, SimState] = field(default_factory=dict)
     """The reference state ``k`` frames ahead, for each offset ``k`` some plugin asked for in
     ``needs().reference_offsets`` (clamped at the clip's last frame)."""
+    rows: torch.Tensor | None = None
+    """``(N,)`` long: the motion library row each environment's reference is at, for data a
+    plugin precomputed per frame in :meth:`~retarget.kinds.step.StepPlugin.prepare`."""
     scene_contacts: torch.Tensor | None = None
     """``(N, G)`` bool when some plugin needs it: whether the kinematic reference touches the
     scene (floor included) with each body group, one column per group of
@@ -142,6 +145,7 @@ class ReferenceBatch:
             devices=self.devices[idx],
             contacts=self.contacts[idx],
             scene_contacts=None if self.scene_contacts is None else self.scene_contacts[idx],
+            rows=None if self.rows is None else self.rows[idx],
         )
 
 

@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     import torch
 
     from retarget.kinds.state import Layout
+    from retarget.motion.library import MotionLibrary
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,12 @@ class StepPlugin(Plugin):
 
     def reset(self, env_ids: torch.Tensor) -> None:
         """Forget per-environment state of ``env_ids`` (stateless plugins ignore this)."""
+
+    def prepare(self, library: MotionLibrary) -> None:
+        """Precompute what depends only on the reference frames, once, before the first step:
+        ``library`` holds every clip at the control rate as flat rows (``global_pos``,
+        ``global_rot``, ``devices``, ``heights`` per clip, ``start``/``length``), and each step's
+        ``ctx.ref.rows`` says which row every environment is at. Default: nothing."""
 
     def needs(self) -> StepNeeds:
         """What the step must gather for this plugin; the default asks for nothing extra."""

@@ -18,8 +18,12 @@ below are what a pinhole of the same sensor keeps without extreme stretching.
 
 from __future__ import annotations
 
-import numpy as np
+from typing import TYPE_CHECKING
+
 from pydantic import BaseModel, ConfigDict, Field
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 class Camera(BaseModel):
@@ -35,6 +39,8 @@ class Camera(BaseModel):
 
     def quat(self) -> np.ndarray:
         """wxyz rotation from a MuJoCo camera frame (looks along -Z, +Y up) to the headset."""
+        import numpy as np
+
         from retarget.geometry import rotations as rot
 
         ahead = np.array([[0.0, 0.0, -1.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # cam -> head

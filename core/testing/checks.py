@@ -32,7 +32,13 @@ from retarget.motion.skeleton import NUM_JOINTS
 from retarget.registry import hookspecs
 from retarget.registry.loader import load_plugins
 from retarget.sim.world import build_world
-from retarget.testing.fakes import FakeVecEnv, TinyCharacter, fake_context, tiny_world
+from retarget.testing.fakes import (
+    FakeVecEnv,
+    TinyCharacter,
+    fake_context,
+    fake_library,
+    tiny_world,
+)
 from retarget.testing.guard import NoPerEnvLoops
 from retarget.testing.toolkit import check_uses_toolkit
 from retarget.train.checkpoint import SAFE_GLOBALS
@@ -158,6 +164,7 @@ def check_entry_point(plugin: object) -> None:
 def _bound(plugin: object, layout):
     inst = make(plugin)
     inst.bind(layout)
+    inst.prepare(fake_library())  # what the env does before the first step
     return inst
 
 

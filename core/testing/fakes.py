@@ -8,7 +8,9 @@ non-negative forces) for any layout and number of environments.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -18,6 +20,9 @@ from retarget.kinds import Character, Scene
 from retarget.kinds.state import Layout, ReferenceBatch, SimState, StepContext
 from retarget.scene.floor import add_floor
 from retarget.sim.world import World, build_world
+
+if TYPE_CHECKING:
+    from retarget.motion.library import MotionLibrary
 
 _CAPSULE = mujoco.mjtGeom.mjGEOM_CAPSULE
 _HINGE = mujoco.mjtJoint.mjJNT_HINGE
@@ -176,6 +181,19 @@ def _fake_state(layout: Layout, n: int, g: torch.Generator) -> SimState:
     )
 
 
+FAKE_LIBRARY_SECONDS = 1.0
+
+
+@functools.cache
+def fake_library() -> MotionLibrary:
+    """A one-second generated idle at the control rate: what ``prepare`` gets in the contract
+    suite, and what ``fake_context``'s ``ref.rows`` index into."""
+    from retarget.motion.library import MotionLibrary
+    from retarget.motion.procedural import idle_clip
+
+    return MotionLibrary([idle_clip(FAKE_LIBRARY_SECONDS)], fps=36.0)
+
+
 def fake_context(
     layout: Layout | None = None,
     num_envs: int = 4,
@@ -209,6 +227,7 @@ def fake_context(
         contacts=torch.rand(num_envs, feet, generator=g) > 0.5,
         future={k: _fake_state(layout, num_envs, g) for k in sorted(set(future_offsets))},
         scene_contacts=torch.rand(num_envs, len(layout.body_groups), generator=g) > 0.5,
+        rows=torch.randint(0, int(FAKE_LIBRARY_SECONDS * 36), (num_envs,), generator=g),
     )
     return StepContext(
         layout=layout,

@@ -41,6 +41,8 @@ TOOLKIT: dict[str, str] = {
     "retarget.train.run_dir": "run directories: resolving, latest checkpoint, lock file name",
     "retarget.cli.recipe_args": "the recipe argument and override flags for command plugins",
     "retarget.cli.numbers": "bounded number and picture-size flags for command plugins",
+    "retarget.motion.devices": "headset and controller poses synthesised from a clip",
+    "retarget.motion.library": "the motion library a step plugin's prepare() reads",
     "retarget.render.*": "offscreen pictures and videos of characters, clips and rollouts",
     "retarget.testing.*": "the contract suite and its test doubles",
 }
