@@ -168,6 +168,11 @@ class RetargetEnv:
         return int(self.observations.sources[source].size)
 
     @property
+    def obs_shapes(self) -> dict[str, list[tuple[str, tuple[int, ...]]]]:
+        """Each group's sources in column order, ``(name, shape)`` (images as ``(C, H, W)``)."""
+        return self.observations.shapes
+
+    @property
     def obs_layout(self) -> dict[str, list[tuple[str, int]]]:
         """Each group's sources in column order, ``(name, size)``: which columns of a group
         come from which sensor or observer (used to carry weights between recipes)."""

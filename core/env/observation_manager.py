@@ -29,6 +29,7 @@ class ObsSource(Protocol):
 
     name: str
     size: int
+    shape: tuple[int, ...]  # of one environment's observation; size is its product
 
     def needs(self) -> StepNeeds: ...
 
@@ -42,10 +43,12 @@ class PluginSource:
     plugin: Sensor | Observer
     name: str
     size: int
+    shape: tuple[int, ...]
 
     @classmethod
     def of(cls, plugin: Sensor | Observer, layout: Layout) -> PluginSource:
-        return cls(plugin, plugin.name, plugin.spec(layout).size)
+        spec = plugin.spec(layout)
+        return cls(plugin, plugin.name, spec.size, tuple(spec.shape))
 
     def needs(self) -> StepNeeds:
         return self.plugin.needs()
@@ -83,6 +86,12 @@ class ObservationManager:
     def layout(self) -> dict[str, list[tuple[str, int]]]:
         """Each group's sources in column order, ``(name, size)``."""
         return {g: [(s, self.sources[s].size) for s in names] for g, names in self.groups.items()}
+
+    @property
+    def shapes(self) -> dict[str, list[tuple[str, tuple[int, ...]]]]:
+        """Each group's sources in column order, ``(name, shape)``: images keep their
+        ``(C, H, W)``, so a network can give them a convolutional encoder."""
+        return {g: [(s, self.sources[s].shape) for s in names] for g, names in self.groups.items()}
 
     def compute(self, ctx: StepContext) -> dict[str, torch.Tensor]:
         """Every group's ``(N, D)`` observation (non-finite values zeroed); each source once."""

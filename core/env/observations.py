@@ -87,6 +87,10 @@ class Proprio:
     def size(self) -> int:
         return proprio_size(self.layout)
 
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return (self.size,)
+
     def needs(self) -> StepNeeds:
         return StepNeeds()
 
@@ -106,6 +110,10 @@ class Privileged:
     @property
     def size(self) -> int:
         return privileged_size(self.layout, len(self.offsets))
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return (self.size,)
 
     def needs(self) -> StepNeeds:
         return StepNeeds(reference_offsets=self.offsets)

@@ -8,6 +8,7 @@ inside a group: the base of a residual policy, the columns a warm start carries 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
 from retarget.errors import PluginError
@@ -19,6 +20,43 @@ class NamedColumns(Protocol):
 
     @property
     def obs_layout(self) -> Mapping[str, Sequence[tuple[str, int]]]: ...
+
+
+@runtime_checkable
+class ShapedColumns(Protocol):
+    """An environment that also says the shape of each source (``RetargetEnv`` does)."""
+
+    @property
+    def obs_shapes(self) -> Mapping[str, Sequence[tuple[str, tuple[int, ...]]]]: ...
+
+
+@dataclass(frozen=True)
+class ImageInput:
+    """An image source inside an observation group: its first column and ``(C, H, W)``."""
+
+    name: str
+    start: int
+    shape: tuple[int, int, int]
+
+    @property
+    def size(self) -> int:
+        c, h, w = self.shape
+        return c * h * w
+
+
+def image_inputs(env: object, group: str) -> tuple[ImageInput, ...]:
+    """The image sources (3-D observations) of ``group``; none for an env without shapes."""
+    if not isinstance(env, ShapedColumns):
+        return ()
+    found, start = [], 0
+    for name, shape in env.obs_shapes.get(group, ()):
+        if len(shape) == 3:
+            found.append(ImageInput(name, start, (int(shape[0]), int(shape[1]), int(shape[2]))))
+        size = 1
+        for s in shape:
+            size *= int(s)
+        start += size
+    return tuple(found)
 
 
 def source_columns(env: object, group: str, source: str) -> slice:

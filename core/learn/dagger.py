@@ -16,13 +16,14 @@ from __future__ import annotations
 import copy
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import torch
 from torch import nn
 
 from retarget.kinds import VecEnv
+from retarget.learn.columns import ImageInput
 from retarget.learn.config import DaggerConfig
 from retarget.learn.episodes import EpisodeTracker, clone_obs
 from retarget.learn.networks import GaussianActor
@@ -40,7 +41,9 @@ class DaggerLearner:
         action_dim: int,
         num_envs: int,
         generator: torch.Generator | None = None,
+        images: Sequence[ImageInput] = (),
     ) -> None:
+        """``images``: the student group's image sources (a convolutional encoder each)."""
         self.config = c = config
         for group in (c.actor_group, c.teacher_group):
             if group not in obs_dims:
@@ -61,6 +64,7 @@ class DaggerLearner:
             init_std=c.teacher_std,
             learn_std=c.loss == "kl",
             generator=self.generator,
+            images=images,
         )
         self.obs_norm = GroupNormalizer({self.actor_key: dim}, clip=c.obs_clip)
         self.optimizer = torch.optim.Adam(self.actor.parameters(), lr=c.learning_rate)
@@ -94,7 +98,7 @@ class DaggerLearner:
 
     def deployable_policy(self) -> nn.Module:
         """Normaliser + student mean network + clamp, frozen: needs no teacher at run time."""
-        return DeployedPolicy(self.obs_norm.groups[self.actor_key], self.actor.net).eval()
+        return DeployedPolicy(self.obs_norm.groups[self.actor_key], self.actor).eval()
 
     def beta(self) -> float:
         """Probability that the teacher acts in an environment this iteration."""

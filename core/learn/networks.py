@@ -15,6 +15,9 @@ from collections.abc import Sequence
 import torch
 from torch import nn
 
+from retarget.learn.columns import ImageInput
+from retarget.learn.encoders import InputEncoder
+
 ACTIVATIONS: dict[str, type[nn.Module]] = {
     "tanh": nn.Tanh,
     "elu": nn.ELU,
@@ -60,9 +63,13 @@ class GaussianActor(nn.Module):
         init_std: float = 0.1,
         learn_std: bool = False,
         generator: torch.Generator | None = None,
+        images: Sequence[ImageInput] = (),
     ) -> None:
         super().__init__()
-        self.net = mlp([obs_dim, *hidden, action_dim], activation)
+        # image sources get a convolutional encoder; without any the actor is a plain MLP
+        self.encoder = InputEncoder(obs_dim, images) if images else None
+        inputs = self.encoder.out_dim if self.encoder is not None else obs_dim
+        self.net = mlp([inputs, *hidden, action_dim], activation)
         init_mlp_(self.net, generator, output_gain=0.01)
         log_std = torch.full((action_dim,), math.log(init_std))
         if learn_std:
@@ -71,6 +78,8 @@ class GaussianActor(nn.Module):
             self.register_buffer("log_std", log_std)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        if self.encoder is not None:
+            obs = self.encoder(obs)
         return self.net(obs)
 
     def std(self) -> torch.Tensor:
@@ -97,10 +106,15 @@ class Critic(nn.Module):
         *,
         activation: str = "tanh",
         generator: torch.Generator | None = None,
+        images: Sequence[ImageInput] = (),
     ) -> None:
         super().__init__()
-        self.net = mlp([obs_dim, *hidden, 1], activation)
+        self.encoder = InputEncoder(obs_dim, images) if images else None
+        inputs = self.encoder.out_dim if self.encoder is not None else obs_dim
+        self.net = mlp([inputs, *hidden, 1], activation)
         init_mlp_(self.net, generator, output_gain=1.0)
 
     def forward(self, obs: torch.Tensor) -> torch.Tensor:
+        if self.encoder is not None:
+            obs = self.encoder(obs)
         return self.net(obs).squeeze(-1)

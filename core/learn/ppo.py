@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import copy
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -27,6 +27,7 @@ import torch
 from torch import nn
 
 from retarget.kinds import VecEnv
+from retarget.learn.columns import ImageInput
 from retarget.learn.config import PPOConfig
 from retarget.learn.episodes import EpisodeTracker, clone_obs
 from retarget.learn.networks import Critic, GaussianActor
@@ -51,7 +52,8 @@ def torch_threads(count: int):
 class DeployedPolicy(nn.Module):
     """Raw actor observations -> actions in [-1, 1]: what a headset application runs.
 
-    Frozen copies of the actor's normaliser and mean network, so it computes exactly what
+    Frozen copies of the actor's normaliser and mean network (its image encoder included), so
+    it computes exactly what
     :meth:`PPOLearner.act` does at export time and later training does not change it.
     """
 
@@ -84,9 +86,11 @@ class PPOLearner:
         num_envs: int,
         generator: torch.Generator | None = None,
         residual: slice | None = None,
+        images: Mapping[str, Sequence[ImageInput]] | None = None,
     ) -> None:
         """``residual``: columns of the raw actor observation added to the network's output
-        (the policy's actions are that base plus a learned, explored residual)."""
+        (the policy's actions are that base plus a learned, explored residual); ``images``:
+        per group, its image sources, which get a convolutional encoder."""
         self.config = c = config
         self.residual = residual
         seed = torch.randint(0, 2**62, (1,), generator=generator).item()
@@ -106,12 +110,14 @@ class PPOLearner:
             init_std=c.init_std,
             learn_std=c.learn_std,
             generator=self.generator,
+            images=(images or {}).get(self.actor_key, ()),
         )
         self.critic = Critic(
             dims[self.critic_key],
             c.critic_hidden,
             activation=c.activation,
             generator=self.generator,
+            images=(images or {}).get(self.critic_key, ()),
         )
         self.obs_norm = GroupNormalizer(dims, clip=c.obs_clip)
         # return statistics follow the improving policy: ~20 iterations of memory
@@ -154,7 +160,7 @@ class PPOLearner:
     def deployable_policy(self) -> nn.Module:
         """A frozen copy of :meth:`act` as one module (normaliser + mean network + clamp)."""
         norm = self.obs_norm.groups[self.actor_key] if self.config.normalize_obs else None
-        return DeployedPolicy(norm, self.actor.net, self.residual).eval()
+        return DeployedPolicy(norm, self.actor, self.residual).eval()
 
     # ------------------------------------------------------------------ collection
 

@@ -166,11 +166,13 @@ class Dagger(Algorithm):
         self.registry = registry
 
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
+        from retarget.learn.columns import image_inputs
         from retarget.learn.dagger import DaggerLearner
         assert isinstance(self.config, DaggerConfig)
         try:
+            images = image_inputs(env, self.config.actor_group)
             self.learner = DaggerLearner(
-                self.config, env.obs_dims, env.action_dim, env.num_envs, generator
+                self.config, env.obs_dims, env.action_dim, env.num_envs, generator, images
             )
         except ValueError as exc:
             raise PluginError(str(exc), plugin=self.name) from None

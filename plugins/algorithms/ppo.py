@@ -32,7 +32,7 @@ class PPO(Algorithm):
         self.learner: PPOLearner | None = None
 
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
-        from retarget.learn.columns import source_columns
+        from retarget.learn.columns import image_inputs, source_columns
         from retarget.learn.ppo import PPOLearner
         assert isinstance(self.config, PPOConfig)
         residual = None
@@ -45,8 +45,10 @@ class PPO(Algorithm):
                     plugin=self.name,
                     field="algorithm.residual",
                 )
+        groups = (self.config.actor_group, self.config.critic_group)
+        images = {g: image_inputs(env, g) for g in groups}
         self.learner = PPOLearner(
-            self.config, env.obs_dims, env.action_dim, env.num_envs, generator, residual
+            self.config, env.obs_dims, env.action_dim, env.num_envs, generator, residual, images
         )
 
     def _ready(self) -> PPOLearner:

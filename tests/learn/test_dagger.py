@@ -179,3 +179,41 @@ def test_ppo_fine_tunes_a_distilled_student(teacher: Path, tmp_path: Path) -> No
     # the fine-tune starts as the student acts: same actor inputs, same weights
     assert torch.allclose(tuned.algorithm.act(obs), source.algorithm.act({"actor": obs["actor"]}),
                           atol=1e-5)  # fmt: skip
+
+
+def test_an_image_student_distils_exports_and_matches_its_onnx(tmp_path) -> None:
+    """A headset + camera-image student (SimXR): the actor gets a CNN for the ego_cameras
+    source, learns from the teacher, and its ONNX export (image columns inside the flat
+    input) gives the same actions."""
+    import json
+
+    import numpy as np
+
+    ort = pytest.importorskip("onnxruntime")
+    from retarget.learn.encoders import InputEncoder
+    from retarget.train.load import load_run
+
+    teacher = tmp_path / "teacher.yaml"
+    teacher.write_text(TINY_TEACHER)
+    assert main(["train", str(teacher), "--steps", "64", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    student = tmp_path / "student.yaml"
+    cams = "{type: ego_cameras, rig: aria, width: 24, height: 16}"
+    student.write_text(TINY.replace("name: tiny", "name: eyes")
+                       .replace("sensors: [three_point]", f"sensors: [hmd, {cams}]"))
+    assert main(["train", str(student), "--teacher", str(tmp_path / "teacher" / "latest"),
+                 "--steps", "64", "--runs-dir", str(tmp_path), "--no-tensorboard",
+                 "--set", "algorithm.minibatch_size=16",
+                 "--set", "sim.actuation=pd"]) == 0  # fmt: skip
+    run = tmp_path / "eyes" / "latest"
+    loaded = load_run(run, load_plugins(), num_envs=3)
+    actor = loaded.algorithm.learner.actor
+    assert isinstance(actor.encoder, InputEncoder) and actor.encoder.images[0].shape == (2, 16, 24)
+    assert main(["export", str(run), "--onnx"]) == 0
+    onnx_path = run / "export" / "policy.onnx"
+    meta = json.loads(onnx_path.with_suffix(".json").read_text())
+    assert [s["name"] for s in meta["observation_sources"]] == ["hmd", "ego_cameras", "proprio"]
+    obs = loaded.env.reset()["actor"].float()
+    expected = loaded.algorithm.act({"actor": obs}).numpy()
+    (got,) = ort.InferenceSession(str(onnx_path)).run(None, {"obs": obs.numpy()})
+    np.testing.assert_allclose(got, expected, atol=1e-5, rtol=0)
