@@ -192,7 +192,8 @@ def main() -> None:
 
         character = yaml.safe_load(lock.read_text())["character"]["type"]
         train(args, ["--character", character, "--sensors", args.sensors,
-                     "--teacher", args.teacher], f"{character}-{args.sensors}-student")  # fmt: skip
+                     "--teacher", args.teacher],
+              f"{character}-{args.sensors.replace(',', '-')}-student")  # fmt: skip
     elif args.stage == "eval":
         reports = {Path(r).resolve().parent.name: evaluate(Path(r), out, args.every, args.seconds)
                    for r in args.runs}  # fmt: skip
