@@ -52,7 +52,7 @@ class StepMetrics:
 
     hmd_pos: torch.Tensor
     hmd_rot: torch.Tensor
-    controller_pos: torch.Tensor
+    controller_pos: torch.Tensor  # the hands (where controllers are held), metres
     device_mean: torch.Tensor
     head_to_headset: torch.Tensor
     contact_agree: torch.Tensor
@@ -65,6 +65,7 @@ class StepMetrics:
     scene_contact_agree: torch.Tensor | None = None
     penetration_max: torch.Tensor | None = None  # metres, deepest overlap this step
     penetration_mean: torch.Tensor | None = None  # metres, mean over overlapping contacts
+    feet_pos: torch.Tensor | None = None  # metres, mean position error of the feet bodies
 
 
 class MetricProbe:
@@ -113,6 +114,7 @@ class MetricProbe:
         speed = s.body_linvel[:, self.feet, :2].norm(dim=-1) * ctx.dt
         skate = (speed * feet_down).sum(-1) / feet_down.sum(-1).clamp_min(1)
         out = StepMetrics(hmd, hmd_rot, ctrl.mean(-1), device_mean, head_gap, agree, skate)
+        out.feet_pos = (s.body_pos[:, self.feet] - r.body_pos[:, self.feet]).norm(dim=-1).mean(-1)
         labels = ctx.ref.scene_contacts
         if labels is not None and self.link_columns.numel():
             up = s.contact_force_up[:, self.link_bodies] @ self.link_member

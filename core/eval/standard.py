@@ -192,6 +192,7 @@ def standard_terms(
         ("hmd_pos", "headset_cm", CM),
         ("hmd_rot", "headset_deg", DEG),
         ("controller_pos", "controller_cm", CM),
+        ("feet_pos", "feet_cm", CM),
         ("g_mpjpe", "g_mpjpe_mm", MM),
         ("mpjpe", "mpjpe_mm", MM),
         ("pa_mpjpe", "pa_mpjpe_mm", MM),

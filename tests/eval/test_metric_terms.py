@@ -118,3 +118,12 @@ def test_the_scene_table_fits_120_columns_too() -> None:
     text = console.export_text()
     assert max(len(line) for line in text.splitlines()) <= 120
     assert "…" not in "".join(text.splitlines()[1:3]) and "box" in text
+
+
+def test_limb_errors_are_reported_for_hands_and_feet() -> None:
+    env = RetargetEnv(Human(), [idle_clip(2.0)], options=EnvOptions(num_envs=2))
+    report = evaluate(env, lambda obs: torch.zeros(2, env.action_dim),
+                      EvalSettings(every=20, max_seconds=0.5))  # fmt: skip
+    overall = report["overall"]
+    assert 0.0 <= overall["feet_cm"] < 30.0 and 0.0 <= overall["controller_cm"] < 60.0
+    assert list(overall).index("feet_cm") == list(overall).index("controller_cm") + 1
