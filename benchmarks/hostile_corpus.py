@@ -13,7 +13,9 @@ a table and the line ``N cases, C clear, T traceback, H hang, S silent``.
 from __future__ import annotations
 
 import argparse
+import functools
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -35,28 +37,22 @@ env: {num_envs: 2}
 sim: {threads: 1}
 """
 
-BVH = """\
-HIERARCHY
-ROOT Hips
-{
-  OFFSET 0 0 0
-  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
-  JOINT Spine
-  {
-    OFFSET 0 10 0
-    CHANNELS 3 Zrotation Xrotation Yrotation
-    End Site
-    {
-      OFFSET 0 10 0
-    }
-  }
-}
-MOTION
-Frames: 2
-Frame Time: 0.033333
-0 90 0 0 0 0 0 0 0
-0 90 1 0 0 5 20 0 0
-"""
+@functools.cache
+def sample_bvh() -> str:
+    """The BVH format plugin's own valid sample, which the BVH cases break one way each."""
+    from retarget.plugins.formats.bvh import Bvh
+
+    with tempfile.TemporaryDirectory() as tmp:
+        return Bvh.write_sample(Path(tmp)).read_text()
+
+
+def _first_value_nan(text: str) -> str:
+    head, motion = text.split("Frame Time:", 1)
+    time_line, first, rest = motion.split("\n", 2)
+    values = first.split()
+    values[3] = "nan"
+    return f"{head}Frame Time:{time_line}\n{' '.join(values)}\n{rest}"
+
 
 HEADER = '{"format": "retarget-devices", "version": 1}'
 POSE = "[0, 1.6, 0, 1, 0, 0, 0]"
@@ -89,8 +85,14 @@ def _flag(name: str, argv: list[str]) -> Case:
     return Case(name, "flag", lambda w, r: [a.replace("RUN", str(r)) for a in argv])
 
 
-def _bvh(name: str, text: str | bytes) -> Case:
-    return Case(name, "bvh", lambda w, r: ["motion", "inspect", _write(w, f"{name}.bvh", text)])
+def _bvh(name: str, text: str | bytes | Callable[[str], str]) -> Case:
+    """A BVH case: fixed content, or a change made to the valid sample."""
+
+    def argv(w: Path, r: Path) -> list[str]:
+        body = text(sample_bvh()) if callable(text) else text
+        return ["motion", "inspect", _write(w, f"{name}.bvh", body)]
+
+    return Case(name, "bvh", argv)
 
 
 def _recording(name: str, lines: list[str] | bytes) -> Case:
@@ -137,8 +139,10 @@ def _crafted_pickle(run: Path) -> None:
 def _nan_weights(run: Path) -> None:
     import torch
 
+    from retarget.train.checkpoint import load_checkpoint
+
     path = sorted((run / "checkpoints").glob("*.pt"))[-1]
-    state = torch.load(path, weights_only=False)
+    state = load_checkpoint(path)  # a checkpoint this runner trained: loaded the safe way
     for value in state["algorithm"]["actor"].values():
         if value.is_floating_point():
             value.fill_(float("nan"))
@@ -195,12 +199,12 @@ CASES = [
     _flag("resume_not_a_run", ["train", "--resume", "/tmp"]),
     _flag("set_no_equals", ["train", "--set", "seed"]),
     # BVH
-    _bvh("frame_time_zero", BVH.replace("0.033333", "0")),
-    _bvh("frame_time_huge", BVH.replace("0.033333", "1e6")),
-    _bvh("frame_time_nan", BVH.replace("0.033333", "nan")),
-    _bvh("frames_huge", BVH.replace("Frames: 2", "Frames: 999999999")),
-    _bvh("value_nan", BVH.replace("0 90 1 0 0 5", "0 90 1 0 nan 5")),
-    _bvh("truncated", BVH[: len(BVH) // 2]),
+    _bvh("frame_time_zero", lambda s: s.replace("Frame Time: 0.03333333", "Frame Time: 0")),
+    _bvh("frame_time_huge", lambda s: s.replace("Frame Time: 0.03333333", "Frame Time: 1e6")),
+    _bvh("frame_time_nan", lambda s: s.replace("Frame Time: 0.03333333", "Frame Time: nan")),
+    _bvh("frames_huge", lambda s: re.sub(r"Frames: \d+", "Frames: 999999999", s)),
+    _bvh("value_nan", _first_value_nan),
+    _bvh("truncated", lambda s: s[: len(s) // 2]),
     _bvh("binary", b"\x00\x01\x02HIERARCHY\xff"),
     _bvh("joints_huge", "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\nCHANNELS 3 Zrotation Xrotation "
          "Yrotation\n" + "".join(f"JOINT B{k}\n{{\nOFFSET 0 1 0\nCHANNELS 3 Zrotation "
