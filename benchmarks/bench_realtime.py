@@ -111,7 +111,8 @@ def main() -> None:
         from retarget.deploy import export_onnx
 
         with tempfile.TemporaryDirectory() as tmp:
-            exported = export_onnx(algorithm, Path(tmp) / "policy.onnx")
+            dims = {"obs_dim": int(one.shape[1])}  # an image actor starts with a conv layer
+            exported = export_onnx(algorithm, Path(tmp) / "policy.onnx", dims)
             options = ort.SessionOptions()
             options.intra_op_num_threads = options.inter_op_num_threads = 1
             session = ort.InferenceSession(str(exported.onnx), options)

@@ -207,6 +207,13 @@ class Backwards(d.GoodReward):
         return retarget.StepNeeds(reference_offsets=(0,))
 
 
+class Unreplayable(d.GoodSensor):
+    """Declares a recorded stream but cannot replay it."""
+
+    name = "unreplayable"
+    recorded = "images"
+
+
 class FlatHeights(d.GoodScene):
     """Returns one height per environment instead of per point."""
 
@@ -301,6 +308,7 @@ BROKEN = [
     (checks.check_subset_reset, FussyReset),
     (checks.check_vectorised, Looping),
     (checks.check_spec, EmptySpec),
+    (checks.check_recorded, Unreplayable),
     (checks.check_character_compiles, NoCompile),
     (checks.check_character_passive_unactuated, ActuatedPassive),
     (checks.check_character_torque_limits, Unlimited),

@@ -52,6 +52,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="RECORDING",
         help="drive the policy from a recorded device stream (.jsonl) instead of --motions",
     )
+    parser.add_argument(
+        "--cameras",
+        action="store_true",
+        help="draw the policy's camera images (what it read) beside each character",
+    )
     add_run_change_args(parser)
     parser.set_defaults(handler=run)
 
@@ -63,12 +68,15 @@ def _changes(args: argparse.Namespace) -> dict:
 
 def _driven_by(rec: DeviceRecording, path: str, registry: Registry, args: argparse.Namespace):
     """A run whose env's only clip carries the recording's devices (at the control rate,
-    calibrated to the character's start) over a standing idle body (start pose only)."""
+    calibrated to the character's start) over a standing idle body (start pose only); sensors
+    that read recorded streams get the recording's camera frames."""
+    import numpy as np
     import torch
 
     from retarget.motion.device_stream import align_to, resample_stream
     from retarget.motion.procedural import idle_clip
     from retarget.train.load import load_run, locked_recipe
+
     changes = _changes(args)
     hz = locked_recipe(resolve_run(path), registry, **changes)[0].recipe.sim.control_hz
     stream = resample_stream(rec, hz)
@@ -81,17 +89,48 @@ def _driven_by(rec: DeviceRecording, path: str, registry: Registry, args: argpar
     last = int(lib.start[0]) + len(stream) - 1
     lib.devices[last + 1 : int(lib.start[0]) + int(lib.length[0])] = lib.devices[last]
     args.seconds = min(args.seconds, (len(stream) - 1) / hz)
+    _replay_recorded(loaded.env, rows, rec, rec.time[0] + np.arange(len(stream)) / hz, args.input)
     return loaded, f"recording {Path(args.input).name}"
+
+
+def _replay_recorded(env, rows, rec: DeviceRecording, times, path: str) -> None:
+    """Hand the sensors that read recorded streams (camera images) what the recording holds
+    for each control step: the latest frame taken by then."""
+    from retarget import RecordedStream
+    from retarget.motion.device_frames import frames_path
+
+    for sensor in env.sensors:
+        if sensor.recorded is None:
+            continue
+        if sensor.recorded != "images":
+            raise RetargetError(
+                f"the run's sensor '{sensor.name}' reads a recorded {sensor.recorded!r} stream; "
+                "device recordings hold poses and camera images only"
+            )
+        if rec.frames is None:
+            raise RetargetError(
+                f"{path} has no camera frames, but the run's '{sensor.name}' sensor reads the "
+                "headset's images",
+                hint=f"record them into {frames_path(path)} (see `retarget motion record`)",
+            )
+        picks = rec.frames.latest(times)
+        sensor.replay(
+            rows,
+            RecordedStream(rec.frames.images[picks], {"rig": rec.frames.rig}, frames_path(path)),
+        )
 
 
 def run(args: argparse.Namespace, registry: Registry) -> int:
     import numpy as np
 
     from retarget.cli.console import out
+    from retarget.learn.columns import image_inputs
     from retarget.motion.device_recording import read_recording
     from retarget.render.character_view import label, save_video
+    from retarget.render.obs_views import image_panel
     from retarget.render.policy_video import render_rollout
     from retarget.train.load import load_run
+
     width, height = args.size
     if Path(args.out).suffix.lower() == ".mp4":  # named before anything is rendered
         require_extra("video", "imageio", "imageio_ffmpeg", needed_for="writing .mp4")
@@ -108,6 +147,14 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         if not 0 <= args.clip < env.library.num_clips:
             raise RetargetError(f"--clip {args.clip}: the motions hold {env.library.num_clips}")
         start = int(args.start * env.sim.settings.control_hz)
+        group = loaded.algorithm.policy()[0] if args.cameras else "actor"
+        images = image_inputs(env, group) if args.cameras else ()
+        if args.cameras and not images:
+            raise RetargetError(
+                f"--cameras: {path} reads no camera images (its '{group}' observation has no "
+                "image source)", hint="train with --sensors hmd,ego_cameras",
+            )  # fmt: skip
+        observed: list[np.ndarray] = []
         frames = render_rollout(
             env,
             loaded.algorithm.act,
@@ -120,7 +167,14 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             height=height,
             ghost_offset=args.ghost_offset,
             ghost=stream is None,
+            observed=observed if images else None,
+            group=group,
         )
+        if images:
+            frames = [
+                np.concatenate([f, image_panel(o, images, f.shape[0])], axis=1)
+                for f, o in zip(frames, observed, strict=True)
+            ]
         clip = clip_name if stream is not None else env.library.names[args.clip]
         name = f"{env.character.name}: {clip}"
         views.append([label(f, [(0.5, 0.06, name)]) for f in frames])

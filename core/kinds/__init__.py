@@ -9,7 +9,7 @@ from retarget.kinds.command import Command
 from retarget.kinds.motion_format import MotionFormat
 from retarget.kinds.reward import RewardConfig, RewardTerm, gaussian_kernel
 from retarget.kinds.scene import Scene
-from retarget.kinds.sensor import Observer, ObsSpec, Sensor
+from retarget.kinds.sensor import Observer, ObsSpec, RecordedStream, Sensor
 from retarget.kinds.step import StepNeeds, StepPlugin
 from retarget.kinds.termination import Termination
 
@@ -38,6 +38,7 @@ __all__ = [
     "Observer",
     "Plugin",
     "PluginConfig",
+    "RecordedStream",
     "RewardConfig",
     "RewardTerm",
     "Scene",

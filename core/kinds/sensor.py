@@ -9,6 +9,10 @@ from typing import TYPE_CHECKING, ClassVar
 from retarget.kinds.step import StepPlugin
 
 if TYPE_CHECKING:
+    from collections.abc import Mapping
+    from pathlib import Path
+
+    import numpy as np
     import torch
 
     from retarget.kinds.state import Layout, StepContext
@@ -38,6 +42,20 @@ class ObsSpec:
         return n
 
 
+@dataclass(frozen=True)
+class RecordedStream:
+    """What a real headset recorded for a sensor, matched to library rows by time.
+
+    ``values`` has one entry per row given to :meth:`Sensor.replay` (``(R, *spec.shape)``),
+    ``meta`` the recording's description of the device (e.g. ``{"rig": JSON}`` for cameras)
+    and ``source`` the file it came from, for error messages.
+    """
+
+    values: np.ndarray
+    meta: Mapping[str, str]
+    source: Path
+
+
 class Sensor(StepPlugin):
     """Base class of sensors: batched device signals in the character's heading frame.
 
@@ -59,6 +77,22 @@ class Sensor(StepPlugin):
         The environment gathers the union of all sensors' windows once per step.
         """
         return (0, 0)
+
+    recorded: ClassVar[str | None] = None
+    """The stream of a device recording this sensor reads on a real headset instead of what
+    it derives from the reference (``"images"``: camera frames); ``None`` (most sensors): it
+    derives everything from the device poses, which a recording replaces by itself."""
+
+    def replay(self, rows: torch.Tensor, stream: RecordedStream) -> None:
+        """From now on, library ``rows`` read ``stream.values`` (one per row, as recorded)
+        instead of what :meth:`prepare` derived; called by ``retarget play --input`` for
+        sensors that declare :attr:`recorded`. Raise ``PluginError`` naming ``stream.source``
+        when the recording does not fit (shape, device)."""
+        from retarget.errors import PluginError
+
+        raise PluginError(
+            f"reads no recorded stream (recorded = {self.recorded!r})", plugin=self.name
+        )
 
 
 class Observer(Sensor):

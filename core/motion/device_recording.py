@@ -4,6 +4,9 @@
 
     {"format": "retarget-devices", "version": 1, "convention": "retarget"}
 
+Camera frames, when the headset's cameras were recorded too, are a separate file beside it
+(``NAME.frames.npz``, :mod:`retarget.motion.device_frames`) on the same clock.
+
 ``convention`` says how the poses in the file are expressed (see below). Every further line
 is one sample::
 
@@ -31,6 +34,7 @@ import numpy as np
 
 from retarget.errors import MotionError
 from retarget.geometry import rotations as rot
+from retarget.motion.device_frames import RecordedFrames, frames_path, read_frames, write_frames
 from retarget.motion.devices import DEVICES
 
 FORMAT = "retarget-devices"
@@ -71,6 +75,7 @@ class DeviceRecording:
     time: np.ndarray  # (T,) seconds
     poses: np.ndarray  # (T, 3, 7)
     tracked: np.ndarray  # (T, 3) bool
+    frames: RecordedFrames | None = None  # the headset cameras' images, when recorded
 
 
 def write_recording(path: str | Path, rec: DeviceRecording, convention: str = "retarget") -> Path:
@@ -83,11 +88,14 @@ def write_recording(path: str | Path, rec: DeviceRecording, convention: str = "r
             sample[name] = [round(float(v), 7) for v in poses[k, d]] if rec.tracked[k, d] else None
         lines.append(json.dumps(sample))
     path.write_text("\n".join(lines) + "\n")
+    if rec.frames is not None:
+        write_frames(frames_path(path), rec.frames)
     return path
 
 
 def read_recording(path: str | Path) -> DeviceRecording:
-    """Read a ``.jsonl`` device recording into the retarget convention (errors name the line)."""
+    """Read a ``.jsonl`` device recording into the retarget convention (errors name the line),
+    with its camera frames when ``NAME.frames.npz`` is beside it."""
     path = Path(path)
     try:
         text = path.read_text(encoding="utf-8")
@@ -180,4 +188,13 @@ def read_recording(path: str | Path) -> DeviceRecording:
     if not tracked.any():
         raise MotionError("no device is tracked in any sample (every pose is null)", file=path)
     poses = convert(poses, convention, "retarget")
-    return DeviceRecording(time, poses, tracked)
+    frames = None
+    if frames_path(path).exists():
+        frames = read_frames(frames_path(path))
+        if frames.time[-1] < time[0] or frames.time[0] > time[-1]:
+            raise MotionError(
+                f"the frames span {frames.time[0]:.2f}-{frames.time[-1]:.2f} s but the poses "
+                f"{time[0]:.2f}-{time[-1]:.2f} s: they must share one clock",
+                file=frames_path(path),
+            )
+    return DeviceRecording(time, poses, tracked, frames)

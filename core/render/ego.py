@@ -69,9 +69,7 @@ class EgoRenderer:
             for c in rig.cameras
         )
         self.rig, self.width, self.height = rig, width, height
-        self.model = mujoco.MjModel.from_xml_string(
-            _SCENE.format(w=width, h=height, cameras=cams)
-        )
+        self.model = mujoco.MjModel.from_xml_string(_SCENE.format(w=width, h=height, cameras=cams))
         self.data = mujoco.MjData(self.model)
         self.renderer = mujoco.Renderer(self.model, height, width)
         flags = self.renderer.scene.flags

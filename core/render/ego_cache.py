@@ -75,7 +75,7 @@ def ego_images(
     try:
         out = np.lib.format.open_memmap(tmp, mode="w+", dtype=np.uint8,
                                         shape=(rows, cams, height, width))  # fmt: skip
-        _render_into(out, joints, headsets, heights, rig, progress)
+        render_into(out, joints, headsets, heights, rig, progress)
         out.flush()
         del out
         os.replace(tmp, path)
@@ -84,7 +84,12 @@ def ego_images(
     return np.load(path, mmap_mode="r")
 
 
-def _render_into(out, joints, headsets, heights, rig, progress: bool) -> None:
+def render_into(
+    out: np.ndarray, joints: np.ndarray, headsets: np.ndarray, heights: np.ndarray,
+    rig: CameraRig, progress: bool = True,
+) -> None:  # fmt: skip
+    """Render frame by frame into ``out`` ``(R, C, H, W)`` (any uint8 array: memory map or
+    memory), with a progress bar."""
     from rich.progress import (
         BarColumn,
         MofNCompleteColumn,
@@ -97,9 +102,10 @@ def _render_into(out, joints, headsets, heights, rig, progress: bool) -> None:
 
     columns = (TextColumn("[bold]camera images"), BarColumn(), MofNCompleteColumn(),
                TimeRemainingColumn())  # fmt: skip
-    with EgoRenderer(rig, out.shape[3], out.shape[2]) as render, Progress(
-        *columns, transient=True, disable=not progress
-    ) as bar:
+    with (
+        EgoRenderer(rig, out.shape[3], out.shape[2]) as render,
+        Progress(*columns, transient=True, disable=not progress) as bar,
+    ):
         task = bar.add_task("render", total=len(joints))
         for r in range(len(joints)):
             out[r] = render(joints[r], headsets[r], float(heights[r]))

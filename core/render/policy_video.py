@@ -42,6 +42,8 @@ def render_rollout(
     ghost: bool = True,
     azimuth: float = 135.0,
     elevation: float = -15.0,
+    observed: list[np.ndarray] | None = None,
+    group: str = "actor",
 ) -> list[np.ndarray]:
     """Run ``policy`` in environment 0 from ``(clip, start)`` and render every control step.
 
@@ -49,6 +51,8 @@ def render_rollout(
     overlaid when 0; ``ghost=False`` hides it, e.g. when the devices come from a recording);
     yellow boxes are the headset and controllers the policy was given. The camera follows the
     character from ``azimuth``/``elevation`` (degrees, world frame; 90 looks along +y).
+    ``observed``, when given, receives environment 0's ``group`` observation of every frame
+    (what the policy read), e.g. to draw its camera views beside the video.
     """
     model = env.world.model
     data = mujoco.MjData(model)
@@ -70,6 +74,8 @@ def render_rollout(
     model.vis.headlight.specular[:] = [0.1, 0.1, 0.1]
     with FrameRenderer(model, width, height) as render, torch.no_grad():
         for _ in range(max(steps, 1)):
+            if observed is not None:
+                observed.append(obs[group][0].float().numpy().copy())
             obs, *_ = env.step(policy(obs))
             row = int(lib.rows(env.clip[:1], env.frame[:1])[0, 0])
             copy_env_pose(env, 0, data)

@@ -259,6 +259,22 @@ def check_vectorised(plugin: object) -> None:
         _run(inst, kind, ctx)
 
 
+def check_recorded(plugin: object) -> None:
+    """A sensor that declares a recorded stream (``recorded = "images"``) implements
+    ``replay``, which ``retarget play --input`` calls with the recording's values."""
+    from retarget.kinds.sensor import Sensor
+
+    cls = plugin_class(plugin)
+    if cls.recorded is None:
+        return
+    assert isinstance(cls.recorded, str) and NAME_RE.match(cls.recorded), (
+        f"recorded = {cls.recorded!r}: name the stream, e.g. 'images'"
+    )
+    assert cls.replay is not Sensor.replay, (
+        f"declares recorded = {cls.recorded!r} but does not implement replay(rows, stream)"
+    )
+
+
 def check_spec(plugin: object) -> None:
     inst = make(plugin)
     spec = inst.spec(tiny_world().layout)
@@ -513,8 +529,8 @@ STEP: tuple[Check, ...] = (
 BY_KIND: dict[str, tuple[Check, ...]] = {
     "reward": STEP,
     "termination": STEP,
-    "sensor": (check_spec, *STEP),
-    "observer": (check_spec, *STEP),
+    "sensor": (check_spec, check_recorded, *STEP),
+    "observer": (check_spec, check_recorded, *STEP),
     "character": (
         check_character_compiles,
         check_character_passive_unactuated,

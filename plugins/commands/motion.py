@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import retarget
 from retarget import Command, MotionError, RetargetError
-from retarget.cli.numbers import MAX_PIXELS, MIN_PIXELS, count
+from retarget.cli.numbers import MAX_PIXELS, MIN_PIXELS, count, image_size
 from retarget.errors import require_extra
 
 if TYPE_CHECKING:
@@ -42,6 +42,8 @@ class MotionCommand(Command):
     (``.mp4`` needs the optional ``imageio-ffmpeg`` package).
     ``retarget motion generate --out DIR [--names sit_stand ...]`` writes the project's generated
     clips as BVH files, so that a subset (e.g. only sitting) can be given to ``--motions``.
+    ``retarget motion record FILE --out me.jsonl [--cameras quest2]`` writes the device stream
+    a headset would record of the clip (and its cameras' frames), for ``retarget play --input``.
     """
 
     name = "motion"
@@ -60,8 +62,12 @@ class MotionCommand(Command):
             choices=("quest2", "aria"),
             help="draw what a headset's cameras see instead (.png: a row of views per frame)",
         )
-        show.add_argument("--size", type=count(MIN_PIXELS, MAX_PIXELS), default=320,
-                          help="pixels per frame (square)")
+        show.add_argument(
+            "--size",
+            type=count(MIN_PIXELS, MAX_PIXELS),
+            default=320,
+            help="pixels per frame (square)",
+        )
         show.add_argument("--start", type=float, default=0.0, help="first second to show")
         show.add_argument("--end", type=float, default=None, help="last second to show")
         show.add_argument(
@@ -76,12 +82,30 @@ class MotionCommand(Command):
             "--names", nargs="+", default=None, help="clips to write (default: all of them)"
         )
         gen.add_argument("--height", type=float, default=None, help="subject height, m")
+        rec = sub.add_parser(
+            "record", help="write what a headset would record of a clip (.jsonl [+ frames])"
+        )
+        rec.add_argument("file", metavar="FILE", help="the motion file the person performs")
+        rec.add_argument("--out", required=True, help="output .jsonl (frames: NAME.frames.npz)")
+        rec.add_argument(
+            "--cameras", choices=("quest2", "aria"), help="also record this rig's camera frames"
+        )
+        rec.add_argument("--size", type=image_size, default="40x30",
+                         help="WIDTHxHEIGHT of each camera frame")  # fmt: skip
+        rec.add_argument(
+            "--convention",
+            choices=("openxr", "unity", "retarget"),
+            default="openxr",
+            help="coordinate convention of the poses written",
+        )
 
     def run(self, args: argparse.Namespace) -> int:
         if args.motion_action == "inspect":
             return self._inspect(args)
         if args.motion_action == "generate":
             return self._generate(args)
+        if args.motion_action == "record":
+            return self._record(args)
         return self._show(args)
 
     def _generate(self, args: argparse.Namespace) -> int:
@@ -103,6 +127,38 @@ class MotionCommand(Command):
         for clip in clips:
             path = write_bvh(clip, out / f"{clip.name}.bvh")
             print(f"wrote {path} ({clip.num_frames} frames, {clip.duration:.1f} s)")
+        return 0
+
+    def _record(self, args: argparse.Namespace) -> int:
+        import numpy as np
+
+        from retarget.motion.device_frames import RecordedFrames, frames_path
+        from retarget.motion.device_recording import DeviceRecording, write_recording
+        from retarget.motion.devices import device_poses
+
+        out = Path(args.out)
+        if out.suffix.lower() != ".jsonl":
+            raise RetargetError(f"--out must end in .jsonl, got '{out.name}'")
+        clip = _read(args.file, args)
+        poses = device_poses(clip.global_pos, clip.global_rot, clip.height)
+        times = np.arange(clip.num_frames) / clip.fps
+        frames = None
+        if args.cameras:
+            from retarget.render.ego_cache import render_into
+            from retarget.render.ego_rigs import RIGS
+
+            rig = RIGS[args.cameras]
+            width, height = args.size
+            images = np.zeros((clip.num_frames, len(rig.cameras), height, width), np.uint8)
+            heights = np.full(clip.num_frames, clip.height)
+            render_into(images, clip.global_pos, poses[:, 0], heights, rig)
+            frames = RecordedFrames(times, images, rig.model_dump_json())
+        tracked = np.ones(poses.shape[:2], dtype=bool)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        write_recording(out, DeviceRecording(times, poses, tracked, frames), args.convention)
+        also = f" and {frames_path(out)} ({args.cameras}, {args.size[0]}x{args.size[1]})"
+        print(f"wrote {out} ({clip.num_frames} samples, {clip.duration:.1f} s, "
+              f"{args.convention}){also if frames else ''}")  # fmt: skip
         return 0
 
     def _inspect(self, args: argparse.Namespace) -> int:
@@ -167,8 +223,10 @@ class MotionCommand(Command):
             picks = np.linspace(first, last, shown).round().astype(int)
             views = _camera_views(clip, picks, args.cameras, args.size)
             write_png(out, contact_sheet(views, columns=views.shape[0] // shown))
-            print(f"wrote {out} ({shown} frames x {views.shape[0] // shown} {args.cameras} "
-                  f"cameras, of {last - first + 1} frames)")
+            print(
+                f"wrote {out} ({shown} frames x {views.shape[0] // shown} {args.cameras} "
+                f"cameras, of {last - first + 1} frames)"
+            )
             return 0
         if suffix == ".png":
             count = max(1, min(args.frames, last - first + 1))

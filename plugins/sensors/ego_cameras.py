@@ -16,7 +16,15 @@ from typing import TYPE_CHECKING, Literal
 from pydantic import Field
 
 import retarget
-from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
+from retarget import (
+    Layout,
+    ObsSpec,
+    PluginConfig,
+    PluginError,
+    RecordedStream,
+    Sensor,
+    StepContext,
+)
 from retarget.render.ego_rigs import RIGS, CameraRig
 
 if TYPE_CHECKING:
@@ -30,7 +38,8 @@ NOISE_BANK = 64
 
 class EgoCamerasConfig(PluginConfig):
     rig: Literal["quest2", "aria"] | CameraRig = Field(
-        "quest2", description="a packaged rig by name, or {cameras: [{name, pos, yaw, pitch, "
+        "quest2",
+        description="a packaged rig by name, or {cameras: [{name, pos, yaw, pitch, "
         "fovy}, ...]} (headset frame: +X ahead, +Y left, +Z up; degrees)",
     )
     width: int = Field(40, ge=16, le=640, description="pixels per view")
@@ -49,6 +58,7 @@ class EgoCameras(Sensor):
 
     name = "ego_cameras"
     Config = EgoCamerasConfig
+    recorded = "images"
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         super().__init__(config)
@@ -83,6 +93,43 @@ class EgoCameras(Sensor):
         self._noise = torch.randn(shape, generator=g) * cfg.noise
         self._gain = 1 + (torch.rand(NOISE_BANK, len(self.rig.cameras), 1, 1, generator=g) * 2
                           - 1) * cfg.brightness  # fmt: skip
+
+    def replay(self, rows: torch.Tensor, stream: RecordedStream) -> None:
+        """Recorded frames for ``rows``; real frames carry their own noise, so read-time
+        augmentation is switched off from here on."""
+        import numpy as np
+        import torch
+        from pydantic import ValidationError
+
+        from retarget.render.ego_rigs import CameraRig
+
+        if self._images is None:
+            raise PluginError("replay before prepare(library)", plugin=self.name)
+        shape = (len(rows), *self._images.shape[1:])
+        if stream.values.shape != shape or stream.values.dtype != np.uint8:
+            raise PluginError(
+                f"{stream.source}: frames are {stream.values.dtype} "
+                f"{'x'.join(map(str, stream.values.shape[1:]))} but this sensor reads uint8 "
+                f"{'x'.join(map(str, shape[1:]))} (cameras x height x width)", plugin=self.name,
+            )  # fmt: skip
+        try:
+            rig = CameraRig.model_validate_json(stream.meta.get("rig", ""))
+        except ValidationError:
+            raise PluginError(
+                f"{stream.source}: the frames name no valid camera rig", plugin=self.name
+            ) from None
+        if rig != self.rig:
+            raise PluginError(
+                f"{stream.source}: recorded with other cameras "
+                f"({', '.join(c.name for c in rig.cameras)}) than this sensor's rig "
+                f"({', '.join(c.name for c in self.rig.cameras)}, or other poses)",
+                plugin=self.name,
+            )
+        images = self._images.clone()  # the memory map is read-only and shared
+        images[rows] = torch.from_numpy(np.ascontiguousarray(stream.values))
+        self._images = images
+        self._noise = torch.zeros_like(self._noise)
+        self._gain = torch.ones_like(self._gain)
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
         if self._images is None or ctx.ref.rows is None:

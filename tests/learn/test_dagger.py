@@ -217,3 +217,63 @@ def test_an_image_student_distils_exports_and_matches_its_onnx(tmp_path) -> None
     expected = loaded.algorithm.act({"actor": obs}).numpy()
     (got,) = ort.InferenceSession(str(onnx_path)).run(None, {"obs": obs.numpy()})
     np.testing.assert_allclose(got, expected, atol=1e-5, rtol=0)
+
+
+def test_a_recorded_headset_capture_drives_the_image_student(tmp_path) -> None:
+    """`motion record --cameras` writes poses + frames; `play --input --cameras` drives an
+    image student from them; a recording without frames, or of other cameras, is refused
+    naming the file; replayed frames are exactly what the student reads."""
+    from retarget import PluginError, RecordedStream
+    from retarget.learn.columns import image_inputs
+    from retarget.render.ego_rigs import RIGS
+
+    teacher = tmp_path / "teacher.yaml"
+    teacher.write_text(TINY_TEACHER)
+    assert main(["train", str(teacher), "--steps", "32", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    student = tmp_path / "student.yaml"
+    cams = "{type: ego_cameras, rig: aria, width: 24, height: 16}"
+    student.write_text(TINY.replace("name: tiny", "name: eyes")
+                       .replace("sensors: [three_point]", f"sensors: [hmd, {cams}]"))
+    assert main(["train", str(student), "--teacher", str(tmp_path / "teacher" / "latest"),
+                 "--steps", "32", "--runs-dir", str(tmp_path), "--no-tensorboard",
+                 "--set", "algorithm.minibatch_size=16", "--set", "sim.actuation=pd"]) == 0  # fmt: skip
+    run = tmp_path / "eyes" / "latest"
+    assert main(["motion", "generate", "--out", str(tmp_path / "clips"), "--names", "walk"]) == 0
+    walk = tmp_path / "clips" / "walk.bvh"
+    rec = tmp_path / "me.jsonl"
+    assert main(["motion", "record", str(walk), "--out", str(rec), "--cameras", "aria",
+                 "--size", "24x16"]) == 0  # fmt: skip
+    assert rec.with_name("me.frames.npz").is_file()
+    sheet = tmp_path / "play.png"
+    assert main(["play", str(run), "--input", str(rec), "--cameras", "--seconds", "1",
+                 "--size", "96x72", "--out", str(sheet)]) == 0  # fmt: skip
+    assert sheet.stat().st_size > 1000
+
+    # poses only: the image student cannot run from it
+    bare = tmp_path / "bare.jsonl"
+    assert main(["motion", "record", str(walk), "--out", str(bare)]) == 0
+    assert main(["play", str(run), "--input", str(bare), "--out", str(sheet)]) == 2
+    # frames of another rig / size are refused by the sensor, naming the frames file
+    other = tmp_path / "other.jsonl"
+    assert main(["motion", "record", str(walk), "--out", str(other), "--cameras", "quest2",
+                 "--size", "24x16"]) == 0  # fmt: skip
+    assert main(["play", str(run), "--input", str(other), "--out", str(sheet)]) == 2
+
+    loaded = load_run(run, load_plugins(), num_envs=2)
+    env = loaded.env
+    sensor = next(s for s in env.sensors if s.name == "ego_cameras")
+    rows = env.library.rows(torch.zeros(1, dtype=torch.long), torch.arange(6))[:, 0]
+    values = np.random.default_rng(0).integers(0, 256, (6, 2, 16, 24), dtype=np.uint8)
+    with pytest.raises(PluginError, match="x.frames.npz.*other cameras"):
+        sensor.replay(rows, RecordedStream(values, {"rig": RIGS["quest2"].model_dump_json()},
+                                           Path("x.frames.npz")))  # fmt: skip
+    with pytest.raises(PluginError, match="x.frames.npz: frames are uint8 2x16x23"):
+        sensor.replay(rows, RecordedStream(values[..., :23], {"rig": RIGS["aria"].model_dump_json()},
+                                           Path("x.frames.npz")))  # fmt: skip
+    sensor.replay(rows, RecordedStream(values, {"rig": RIGS["aria"].model_dump_json()},
+                                       Path("x.frames.npz")))  # fmt: skip
+    (image,) = image_inputs(env, "actor")
+    obs = env.place(torch.zeros(2, dtype=torch.long), torch.tensor([2, 5]))["actor"]
+    seen = obs[:, image.start : image.start + image.size].reshape(2, *image.shape).numpy()
+    np.testing.assert_allclose(seen, values[[2, 5]] / 255.0, atol=1e-6)

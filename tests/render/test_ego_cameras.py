@@ -54,7 +54,7 @@ def test_cache_hit_miss_by_content_and_images_match_a_direct_render(tmp_path, mo
     def no_rendering(*args, **kwargs):
         raise AssertionError("a cache hit must not render")
 
-    monkeypatch.setattr(ego_cache, "_render_into", no_rendering)
+    monkeypatch.setattr(ego_cache, "render_into", no_rendering)
     again = ego_cache.ego_images(joints, headsets, heights, rig, 32, 24, folder=tmp_path)
     np.testing.assert_array_equal(again, first)  # memory-mapped from the file
     moved = joints.copy()
