@@ -138,7 +138,16 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         def progress(done: int, total: int, clips_done: int, clips: int) -> None:
             bar.update(task, completed=done, total=total, clips=f"{clips_done}/{clips} clips")
 
-        report = evaluate(loaded.env, loaded.algorithm.act, settings, progress, fall=fall)
+        estimator = loaded.algorithm.pose_estimator()
+        kinematic = None
+        if estimator is not None:  # a kinematic method: the character placed in its estimate
+            from retarget.eval.kinematic import KinematicRollout, estimate_library
+
+            kinematic = KinematicRollout(loaded.env, estimate_library(loaded.env, estimator))
+        report = evaluate(loaded.env, loaded.algorithm.act, settings, progress, fall=fall,
+                          kinematic=kinematic)  # fmt: skip
+        if kinematic is not None:
+            report["method"] = "kinematic (pose estimator)"
     report["run"] = str(loaded.run)
     report["checkpoint"] = str(loaded.checkpoint)
     report["motions"] = args.motions or loaded.resolved.recipe.motions.path or "(generated)"

@@ -30,9 +30,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     env = loaded.env
     group, _ = policy_of(loaded.algorithm)
     layout = env.layout
-    metadata = {
-        "run": str(loaded.run),
-        "checkpoint": str(loaded.checkpoint),
+    metadata = loaded.algorithm.export_metadata(env) or {
         "character": env.character.name,
         "control_hz": env.sim.settings.control_hz,
         "obs_dim": env.obs_dims[group],
@@ -43,6 +41,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         "torque_limits": [float(t) for t in layout.torque_limits],
         "actuation": describe_actuation(env.sim.model, env.sim.settings.actuation),
     }
+    metadata = {"run": str(loaded.run), "checkpoint": str(loaded.checkpoint), **metadata}
     path = Path(args.out) if args.out else loaded.run / "export" / "policy.onnx"
     exported = export_onnx(loaded.algorithm, path, metadata)
     out.print(

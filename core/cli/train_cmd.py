@@ -144,6 +144,15 @@ def _resume_recipe(run: Path, registry: Registry, threads: int | None):
     return resolved
 
 
+def _figures(last: dict[str, float]) -> str:
+    """What the progress bar shows: a policy's return and episode length, or an
+    algorithm's own loss and error when it steps no episodes (a pose estimator)."""
+    if "mpjpe_mm" in last and "episode_return" not in last:
+        return f"loss {last.get('loss', 0.0):>7.3f}  mpjpe {last['mpjpe_mm']:>5.1f} mm"
+    return (f"return {last.get('episode_return', 0.0):>7.2f}  "
+            f"ep len {last.get('episode_length', 0.0):>5.1f}")  # fmt: skip
+
+
 def run(args: argparse.Namespace, registry: Registry) -> int:
     from rich.progress import (
         BarColumn,
@@ -234,15 +243,12 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         TextColumn("[bold]train"),
         BarColumn(),
         TaskProgressColumn(),
-        TextColumn(
-            "{task.fields[rate]:>6.0f} steps/s  return {task.fields[ret]:>7.2f}  "
-            "ep len {task.fields[len]:>5.1f}"
-        ),
+        TextColumn("{task.fields[rate]:>6.0f} steps/s  {task.fields[figures]}"),
         TimeRemainingColumn(),
     ]
     minutes_total = 60.0 * budget.minutes if budget.minutes is not None else None
     with Progress(*columns, console=out, transient=False) as bar:
-        task = bar.add_task("train", total=total or minutes_total, rate=0.0, ret=0.0, len=0.0)
+        task = bar.add_task("train", total=total or minutes_total, rate=0.0, figures="")
 
         def update(p) -> None:
             done = p.env_steps if total is not None else p.elapsed
@@ -250,8 +256,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
                 task,
                 completed=done if (total or minutes_total) else None,
                 rate=p.last.get("steps_per_s_total", 0.0),
-                ret=p.last.get("episode_return", 0.0),
-                len=p.last.get("episode_length", 0.0),
+                figures=_figures(p.last),
             )
 
         last = trainer.train(budget, on_iteration=update)

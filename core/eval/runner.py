@@ -21,6 +21,7 @@ import numpy as np
 import torch
 
 from retarget.env import RetargetEnv
+from retarget.eval.kinematic import KinematicRollout
 from retarget.eval.metrics import MetricProbe
 from retarget.eval.standard import standard_terms
 from retarget.eval.terms import EvalBatch, EvalStep, MetricTerm, summarise
@@ -54,9 +55,14 @@ def evaluate(
     on_batch: Callable[[int, int, int, int], None] | None = None,
     fall: Termination | None = None,
     terms: Sequence[MetricTerm] = (),
+    kinematic: KinematicRollout | None = None,
 ) -> dict:
     """Metrics per clip and overall (JSON-ready dict); ``fall`` (a bound termination) counts
     falls per minute; ``terms`` are metrics reported after the standard ones.
+
+    ``kinematic`` (a pose estimator's :class:`~retarget.eval.kinematic.KinematicRollout`)
+    places the character in the estimate each frame instead of stepping ``policy`` (which is
+    then unused), so both kinds of method get the same table.
 
     ``on_batch(runs_done, runs, clips_done, clips)`` follows progress. Ctrl-C stops after the
     batch being stepped: the report then holds the clips whose runs all finished, and
@@ -80,7 +86,9 @@ def evaluate(
     for begin in range(0, runs, n):
         idx = np.arange(begin, min(begin + n, runs))
         try:
-            result, seconds = _run_batch(env, policy, probe, every, cfg, clips, frames, idx)
+            result, seconds = _run_batch(
+                env, policy, probe, every, cfg, clips, frames, idx, kinematic
+            )
         except KeyboardInterrupt:  # keep what is finished; the batch being stepped is lost
             interrupted = True
             break
@@ -104,7 +112,7 @@ def evaluate(
     return report
 
 
-def _run_batch(env, policy, probe, every, cfg, clips, frames, idx):
+def _run_batch(env, policy, probe, every, cfg, clips, frames, idx, kinematic=None):
     """Step the runs ``idx`` together; their per-run values and the wall time it took."""
     n, dt = env.num_envs, env.sim.settings.control_dt
     max_steps = round(cfg.max_seconds / dt)
@@ -116,14 +124,19 @@ def _run_batch(env, policy, probe, every, cfg, clips, frames, idx):
     failed_at = torch.full((n,), float(max_steps + 1))
     for term in every:
         term.start(n)
-    obs = env.place(c, f)
+    obs = env.place(c, f) if kinematic is None else None
     t0 = time.perf_counter()
     with torch.no_grad():
         for step in range(int(available.max())):
-            obs, *_ = env.step(policy(obs))
-            ctx = env.last_context
-            deepest, mean = env.sim.penetration()
-            m = probe(ctx, (torch.from_numpy(deepest).float(), torch.from_numpy(mean).float()))
+            if kinematic is None:
+                obs, *_ = env.step(policy(obs))
+                ctx = env.last_context
+                deepest, mean = env.sim.penetration()
+                pen = (torch.from_numpy(deepest).float(), torch.from_numpy(mean).float())
+            else:
+                ctx = kinematic.context(c, f + step + 1, step + 1)
+                pen = kinematic.penetration_at(c, f + step + 1)
+            m = probe(ctx, pen)
             alive = step < available
             ok = alive & (step < failed_at)
             newly = ok & (m.device_mean > cfg.fail_distance)

@@ -90,6 +90,18 @@ class Algorithm(Plugin):
             hint="train from scratch (drop --init-from)",
         )
 
+    def pose_estimator(self) -> Any | None:
+        """For a kinematic method (a pose estimator, which outputs a body instead of actions):
+        the object ``retarget eval`` measures, with ``estimate_rows(rows)`` (see
+        :mod:`retarget.eval.kinematic`). ``None`` (the default): a policy, evaluated by
+        stepping physics with :meth:`act`."""
+        return None
+
+    def export_metadata(self, env: Any) -> dict[str, Any] | None:
+        """The JSON sidecar of an exported model whose input or output is not a policy's
+        (observation group in, actions out); ``None`` (the default): the policy sidecar."""
+        return None
+
     def policy(self) -> tuple[str, torch.nn.Module]:
         """The deployable policy: ``(group, module)`` where ``module`` maps that observation
         group's raw ``(B, D)`` float32 tensor to actions ``(B, A)`` in [-1, 1], normalisation

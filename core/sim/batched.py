@@ -261,6 +261,29 @@ class BatchedSim:
                 deepest[i], mean[i] = depth.max(), depth.mean()
         return deepest, mean
 
+    def pose_penetration(self, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Like :meth:`penetration`, for kinematic poses ``(R, nq)`` of the character (scene
+        joints and props at their default placement): how deep a pose estimate puts the body
+        into the floor and props, without stepping physics. One collision pass per pose."""
+        if self._scratch is None:
+            self._scratch = mujoco.MjData(self.model)
+        data, nq = self._scratch, qpos.shape[1]
+        deepest, mean = np.zeros(len(qpos)), np.zeros(len(qpos))
+        mujoco.mj_resetData(self.model, data)
+        for i in range(len(qpos)):  # an evaluation metric, once per estimated frame
+            data.qpos[:nq] = qpos[i]
+            mujoco.mj_fwdPosition(self.model, data)
+            n = data.ncon
+            if n == 0:
+                continue
+            con = data.contact
+            own = self._own_geom[np.asarray(con.geom[:n]).reshape(-1, 2)]
+            dist = np.asarray(con.dist[:n])
+            depth = -dist[(own[:, 0] != own[:, 1]) & (dist < 0)]
+            if depth.size:
+                deepest[i], mean[i] = depth.max(), depth.mean()
+        return deepest, mean
+
     def each_env(self, fn: Callable[[mujoco.MjData], T]) -> list[T]:
         """``fn`` of every environment's full ``MjData`` (contacts included), in order: for
         evaluation metrics that need MuJoCo's per-simulation contact list, which is not

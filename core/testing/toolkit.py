@@ -43,6 +43,8 @@ TOOLKIT: dict[str, str] = {
     "retarget.cli.numbers": "bounded number and picture-size flags for command plugins",
     "retarget.motion.devices": "headset and controller poses synthesised from a clip",
     "retarget.motion.library": "the motion library a step plugin's prepare() reads",
+    "retarget.motion.device_recording": "recorded device streams (.jsonl) and conventions",
+    "retarget.motion.device_frames": "a recording's camera frames (NAME.frames.npz)",
     "retarget.render.*": "offscreen pictures and videos of characters, clips and rollouts",
     "retarget.testing.*": "the contract suite and its test doubles",
 }

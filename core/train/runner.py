@@ -190,7 +190,10 @@ class Trainer:
                 stats.update(self._termination_shares(ends_before))
                 p = self.progress
                 p.iteration += 1
-                p.env_steps += self.env.total_steps - before
+                stepped = self.env.total_steps - before
+                # an algorithm that learns from the library without stepping (a pose
+                # estimator) reports the samples it used instead
+                p.env_steps += stepped if stepped else int(stats.pop("samples", 0))
                 p.elapsed = time.perf_counter() - start
                 p.last = {k: float(v) for k, v in stats.items()}
                 p.last["steps_per_s_total"] = p.env_steps / max(p.elapsed, 1e-9)

@@ -237,7 +237,8 @@ def test_a_recorded_headset_capture_drives_the_image_student(tmp_path) -> None:
                        .replace("sensors: [three_point]", f"sensors: [hmd, {cams}]"))
     assert main(["train", str(student), "--teacher", str(tmp_path / "teacher" / "latest"),
                  "--steps", "32", "--runs-dir", str(tmp_path), "--no-tensorboard",
-                 "--set", "algorithm.minibatch_size=16", "--set", "sim.actuation=pd"]) == 0  # fmt: skip
+                 "--set", "algorithm.minibatch_size=16",
+                 "--set", "sim.actuation=pd"]) == 0  # fmt: skip
     run = tmp_path / "eyes" / "latest"
     assert main(["motion", "generate", "--out", str(tmp_path / "clips"), "--names", "walk"]) == 0
     walk = tmp_path / "clips" / "walk.bvh"
@@ -265,14 +266,13 @@ def test_a_recorded_headset_capture_drives_the_image_student(tmp_path) -> None:
     sensor = next(s for s in env.sensors if s.name == "ego_cameras")
     rows = env.library.rows(torch.zeros(1, dtype=torch.long), torch.arange(6))[:, 0]
     values = np.random.default_rng(0).integers(0, 256, (6, 2, 16, 24), dtype=np.uint8)
-    with pytest.raises(PluginError, match="x.frames.npz.*other cameras"):
-        sensor.replay(rows, RecordedStream(values, {"rig": RIGS["quest2"].model_dump_json()},
-                                           Path("x.frames.npz")))  # fmt: skip
-    with pytest.raises(PluginError, match="x.frames.npz: frames are uint8 2x16x23"):
-        sensor.replay(rows, RecordedStream(values[..., :23], {"rig": RIGS["aria"].model_dump_json()},
-                                           Path("x.frames.npz")))  # fmt: skip
-    sensor.replay(rows, RecordedStream(values, {"rig": RIGS["aria"].model_dump_json()},
-                                       Path("x.frames.npz")))  # fmt: skip
+    aria, quest2 = ({"rig": RIGS[r].model_dump_json()} for r in ("aria", "quest2"))
+    source = Path("x.frames.npz")
+    with pytest.raises(PluginError, match=r"x\.frames\.npz.*other cameras"):
+        sensor.replay(rows, RecordedStream(values, quest2, source))
+    with pytest.raises(PluginError, match=r"x\.frames\.npz: frames are uint8 2x16x23"):
+        sensor.replay(rows, RecordedStream(values[..., :23], aria, source))
+    sensor.replay(rows, RecordedStream(values, aria, source))
     (image,) = image_inputs(env, "actor")
     obs = env.place(torch.zeros(2, dtype=torch.long), torch.tensor([2, 5]))["actor"]
     seen = obs[:, image.start : image.start + image.size].reshape(2, *image.shape).numpy()

@@ -1,0 +1,174 @@
+"""Training samples of a kinematic pose estimator: device windows in, the human body out.
+
+A pose estimator (EnvPoser, EgoPoser) has no simulated body, so everything is expressed in
+the frame a headset application has: the **headset frame**, the current headset's ground
+projection turned to its heading (heights stay world heights). The inputs are the run's own
+sensor plugins computed as if the character's root were the headset (their heading-frame
+transform then is exactly this frame), so an estimator and a policy read the same device
+features. The target is the canonical skeleton (:mod:`retarget.motion.skeleton`): the root's
+position and rotation in the headset frame and every joint's local rotation, plus the two
+foot contacts; positions come from forward kinematics with the average adult's proportions at
+the clip's height, so position errors measure the pose, not bone lengths.
+
+Mirroring (left and right swapped, reflected through the headset's XZ plane) doubles the data
+for free, in tensor operations on the batch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import torch
+
+from retarget.geometry.heading import (
+    ground_origin,
+    heading_cos_sin,
+    heading_quat,
+    quat_conj,
+    quat_mul,
+    quat_to_matrix,
+    unyaw,
+)
+from retarget.kinds import Sensor
+from retarget.kinds.state import ReferenceBatch, StepContext
+from retarget.motion import skeleton as sk
+
+J = sk.NUM_JOINTS
+PARENTS = sk.PARENTS
+UNIT_OFFSETS = torch.tensor(sk.rest_offsets(1.0), dtype=torch.float32)
+"""Bone offsets ``(J, 3)`` of a 1 m tall average adult: times the height, the skeleton used."""
+_LR = torch.tensor(sk.LEFT_RIGHT, dtype=torch.long)
+_FLIP_POS = torch.tensor([1.0, -1.0, 1.0])
+_FLIP_QUAT = torch.tensor([1.0, -1.0, 1.0, -1.0])
+
+
+def sixd_to_matrix(x: torch.Tensor) -> torch.Tensor:
+    """Rotation matrices ``(..., 3, 3)`` from 6D vectors (the first two columns, as
+    :func:`retarget.geometry.heading.quat_to_6d` lays them out), by Gram-Schmidt."""
+    a = torch.nn.functional.normalize(x[..., 0:3], dim=-1, eps=1e-8)
+    b = x[..., 3:6] - (a * x[..., 3:6]).sum(-1, keepdim=True) * a
+    b = torch.nn.functional.normalize(b, dim=-1, eps=1e-8)
+    return torch.stack([a, b, torch.cross(a, b, dim=-1)], dim=-1)
+
+
+def matrix_to_6d(m: torch.Tensor) -> torch.Tensor:
+    return torch.cat([m[..., :, 0], m[..., :, 1]], dim=-1)
+
+
+def forward_kinematics(
+    root_pos: torch.Tensor, local: torch.Tensor, heights: torch.Tensor
+) -> torch.Tensor:
+    """Joint positions ``(B, J, 3)`` of root positions ``(B, 3)``, local rotation matrices
+    ``(B, J, 3, 3)`` and body heights ``(B,)`` (average proportions)."""
+    offsets = UNIT_OFFSETS.to(root_pos) * heights[:, None, None]
+    pos: list[torch.Tensor] = [root_pos]
+    glob: list[torch.Tensor] = [local[:, 0]]
+    for j in range(1, J):
+        p = PARENTS[j]
+        pos.append(pos[p] + (glob[p] @ offsets[:, j, :, None])[..., 0])
+        glob.append(glob[p] @ local[:, j])
+    return torch.stack(pos, dim=1)
+
+
+@dataclass(frozen=True)
+class HeadsetFrame:
+    """The headset frame of a batch: ground origin ``(B, 3)``, heading as cos/sin and quat."""
+
+    origin: torch.Tensor
+    cos: torch.Tensor
+    sin: torch.Tensor
+    yaw: torch.Tensor  # (B, 4) wxyz, rotation about +Z only
+
+    @classmethod
+    def of(cls, headset: torch.Tensor) -> HeadsetFrame:
+        """From current headset poses ``(B, 7)``."""
+        c, s = heading_cos_sin(headset[:, 3:7])
+        return cls(ground_origin(headset[:, :3]), c, s, heading_quat(headset[:, 3:7]))
+
+    def points_in(self, world: torch.Tensor) -> torch.Tensor:
+        shape = (world.shape[0],) + (1,) * (world.ndim - 2) + (3,)
+        return unyaw(world - self.origin.reshape(shape), self.cos, self.sin)
+
+    def points_out(self, local: torch.Tensor) -> torch.Tensor:
+        """World points of headset-frame points ``(B, ..., 3)``."""
+        shape = (local.shape[0],) + (1,) * (local.ndim - 2) + (3,)
+        return unyaw(local, self.cos, -self.sin) + self.origin.reshape(shape)
+
+    def quat_in(self, q: torch.Tensor) -> torch.Tensor:
+        return quat_mul(quat_conj(self.yaw), q)
+
+    def quat_out(self, q: torch.Tensor) -> torch.Tensor:
+        return quat_mul(self.yaw, q)
+
+
+def mirror_devices(devices: torch.Tensor) -> torch.Tensor:
+    """Device poses ``(..., 3, 7)`` reflected through the world XZ plane, controllers swapped."""
+    swapped = devices[..., [0, 2, 1], :]
+    return torch.cat([swapped[..., :3] * _FLIP_POS, swapped[..., 3:] * _FLIP_QUAT], dim=-1)
+
+
+def mirror_body(
+    root_pos: torch.Tensor, local_rot: torch.Tensor, contacts: torch.Tensor
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """The canonical pose ``(B, 3)``, ``(B, J, 4)``, contacts ``(B, 2)`` mirrored the same way."""
+    return root_pos * _FLIP_POS, local_rot[:, _LR] * _FLIP_QUAT, contacts.flip(-1)
+
+
+@dataclass(frozen=True)
+class PoseTargets:
+    """What the estimator should output, in the headset frame."""
+
+    root_pos: torch.Tensor  # (B, 3)
+    rot6d: torch.Tensor  # (B, J, 6): root rotation relative to the heading, then local
+    positions: torch.Tensor  # (B, J, 3) joint positions by forward kinematics
+    contacts: torch.Tensor  # (B, 2) float 0/1
+    heights: torch.Tensor  # (B,)
+
+
+def sensor_inputs(env, rows: torch.Tensor, mirrored: torch.Tensor | None = None):
+    """Inputs ``(B, D)`` of the env's sensors at library ``rows`` ``(B,)`` in the headset
+    frame, and that frame. ``mirrored`` ``(B,)`` bool reflects those samples' devices."""
+    lib = env.library
+    clip = torch.searchsorted(lib.start, rows, right=True) - 1
+    frame = rows - lib.start[clip]
+    window = lib.rows(clip, frame, env.window_offsets)
+    devices = lib.devices[window]  # (B, W, 3, 7)
+    if mirrored is not None and bool(mirrored.any()):
+        devices = torch.where(mirrored[:, None, None, None], mirror_devices(devices), devices)
+    now = devices[:, env.window_offsets.index(0), 0]
+    frame_of = HeadsetFrame.of(now)
+    pose = env.reference.pose(rows)
+    qpos = pose.qpos.clone()
+    qpos[:, :3], qpos[:, 3:7] = now[:, :3], frame_of.yaw
+    sim = replace(pose, qpos=qpos)
+    ref = ReferenceBatch(pose=pose, devices=devices, window_offsets=tuple(env.window_offsets),
+                         contacts=lib.contacts[rows], rows=rows)  # fmt: skip
+    b, nu = rows.shape[0], len(env.layout.actuator_names)
+    zeros = torch.zeros(b, nu)
+    ctx = StepContext(layout=env.layout, sim=sim, ref=ref, action=zeros, prev_action=zeros,
+                      episode_step=torch.zeros(b, dtype=torch.long), dt=1.0 / lib.fps)  # fmt: skip
+    sensors: list[Sensor] = list(env.sensors)
+    inputs = torch.cat([s.observe(ctx).reshape(b, -1).float() for s in sensors], dim=-1)
+    return inputs, frame_of
+
+
+def pose_targets(
+    env, rows: torch.Tensor, frame: HeadsetFrame, mirrored: torch.Tensor | None = None
+) -> PoseTargets:
+    """The reference body at ``rows`` in the headset ``frame`` (mirrored where asked)."""
+    lib = env.library
+    root_pos, local_rot = lib.root_pos[rows], lib.local_rot[rows]
+    contacts = lib.contacts[rows].float()
+    if mirrored is not None and bool(mirrored.any()):
+        m_pos, m_rot, m_con = mirror_body(root_pos, local_rot, contacts)
+        root_pos = torch.where(mirrored[:, None], m_pos, root_pos)
+        local_rot = torch.where(mirrored[:, None, None], m_rot, local_rot)
+        contacts = torch.where(mirrored[:, None], m_con, contacts)
+    clip = torch.searchsorted(lib.start, rows, right=True) - 1
+    heights = lib.heights[clip].float()
+    local_rot = local_rot.clone()
+    local_rot[:, 0] = frame.quat_in(local_rot[:, 0])
+    root = frame.points_in(root_pos)
+    mats = quat_to_matrix(local_rot)
+    return PoseTargets(root, matrix_to_6d(mats), forward_kinematics(root, mats, heights),
+                       contacts, heights)  # fmt: skip

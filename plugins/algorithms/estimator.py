@@ -1,0 +1,156 @@
+"""A kinematic pose estimator as an algorithm plugin (EnvPoser stage I): no physics, no actions.
+
+``retarget train --algorithm estimator --sensors three_point`` (or ``hmd``) trains, on the run's
+motion library with synthesised devices, a network from a window of device features to the
+whole canonical body with per-joint uncertainty and foot contacts
+(:mod:`retarget.learn.estimator`). Before the run starts, :meth:`Estimator.prepare_recipe`
+widens the device sensors' ``past`` to the estimator's ``window`` and sets one environment
+(nothing is simulated while training). ``retarget eval`` measures it with the same metrics as
+policies (:mod:`retarget.eval.kinematic`), and ``retarget export --onnx`` writes it with a
+sidecar describing inputs (headset frame) and outputs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+from pydantic import Field
+
+import retarget
+from retarget import Algorithm, PluginConfig, PluginError, VecEnv
+
+if TYPE_CHECKING:
+    import torch
+
+    from retarget.learn.estimator import EstimatorLearner
+
+
+class EstimatorConfig(PluginConfig):
+    window: int = Field(
+        16, ge=1, le=256,
+        description="device frames the estimator reads (now and window-1 past); the device "
+        "sensors' past is widened to window-1",
+    )  # fmt: skip
+    hidden: list[int] = Field([512, 512], min_length=1, max_length=8)
+    learning_rate: float = Field(1e-3, gt=0, le=1)
+    batch_size: int = Field(2048, gt=0, le=1_000_000, description="frames per gradient step")
+    updates_per_iteration: int = Field(4, gt=0, le=10_000)
+    mirror: bool = Field(True, description="mirror half of each batch (left/right swapped)")
+    rot_weight: float = Field(0.1, ge=0, description="weight of the rotations' NLL")
+    contact_weight: float = Field(0.1, ge=0, description="weight of the contacts' BCE")
+
+
+class Estimator(Algorithm):
+    """Supervised pose estimation from device windows, Gaussian NLL with per-joint variance.
+
+    A kinematic method: it outputs the human body, not actions, so ``act`` refuses and
+    ``retarget eval`` evaluates it by placing the character in the estimated pose each frame.
+    """
+
+    name = "estimator"
+    Config = EstimatorConfig
+
+    def __init__(self, config: PluginConfig | None = None) -> None:
+        super().__init__(config)
+        self.learner: EstimatorLearner | None = None
+
+    def prepare_recipe(self, recipe: dict[str, Any], registry: Any) -> dict[str, Any]:
+        cfg = self.config
+        assert isinstance(cfg, EstimatorConfig)
+        recipe = dict(recipe)
+        sensors = []
+        for comp in recipe.get("sensors") or []:
+            if isinstance(comp, dict) and "past" in comp:
+                comp = {**comp, "past": max(int(comp["past"]), cfg.window - 1)}
+            sensors.append(comp)
+        recipe["sensors"] = sensors
+        recipe["env"] = {**(recipe.get("env") or {}), "num_envs": 1}
+        return recipe
+
+    def _ready(self) -> EstimatorLearner:
+        if self.learner is None:
+            raise PluginError("setup(env) must be called first", plugin=self.name)
+        return self.learner
+
+    def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
+        import torch
+
+        from retarget.learn.estimator import EstimatorLearner, EstimatorSettings
+
+        for attr in ("library", "reference", "sensors", "window_offsets", "layout"):
+            if not hasattr(env, attr):
+                raise PluginError(
+                    f"needs a retarget environment (its motion library and sensors); this one "
+                    f"has no '{attr}'", plugin=self.name,
+                )  # fmt: skip
+        sensors = list(env.sensors)  # type: ignore[attr-defined]
+        if not sensors:
+            raise PluginError("needs at least one sensor (hmd or three_point)", plugin=self.name)
+        for s in sensors:
+            if getattr(s, "recorded", None) is not None:
+                raise PluginError(
+                    f"reads device poses; sensor '{s.name}' gives recorded images",
+                    plugin=self.name, hint="use --sensors hmd or three_point",
+                )  # fmt: skip
+        cfg = self.config
+        assert isinstance(cfg, EstimatorConfig)
+        settings = EstimatorSettings(
+            hidden=tuple(cfg.hidden), lr=cfg.learning_rate, batch_size=cfg.batch_size,
+            updates_per_iteration=cfg.updates_per_iteration, mirror=cfg.mirror,
+            rot_weight=cfg.rot_weight, contact_weight=cfg.contact_weight,
+        )  # fmt: skip
+        self.learner = EstimatorLearner(env, settings, generator or torch.Generator())
+
+    def train_iteration(self, env: VecEnv) -> dict[str, float]:
+        return self._ready().train_iteration()
+
+    def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
+        raise PluginError(
+            "estimates the body; it has no actions to drive a character",
+            plugin=self.name, hint="`retarget eval RUN` measures it; `retarget export` writes it",
+        )  # fmt: skip
+
+    def pose_estimator(self) -> EstimatorLearner:
+        return self._ready()
+
+    def policy(self) -> tuple[str, torch.nn.Module]:
+        from retarget.learn.estimator import DeployedEstimator
+
+        return "estimator", DeployedEstimator(self._ready().net).eval()
+
+    def export_metadata(self, env: Any) -> dict[str, Any]:
+        from retarget.motion import skeleton as sk
+
+        learner = self._ready()
+        layout = env.layout
+        return {
+            "kind": "pose_estimator",
+            "obs_dim": learner.obs_dim,
+            "frame": "headset: the current headset's ground point and heading (x ahead, "
+            "y left, z up; heights are world heights); device features as the sensors "
+            "compute them with the character root replaced by that frame",
+            "observation_sources": [
+                {"name": s.name, "size": int(s.spec(layout).size)} for s in env.sensors
+            ],
+            "control_hz": env.sim.settings.control_hz,
+            "joints": list(sk.JOINT_NAMES),
+            "outputs": [
+                {"name": "root_pos", "size": 3},
+                {"name": "rot6d", "size": 6 * sk.NUM_JOINTS,
+                 "note": "root relative to the heading, then each joint's local rotation"},
+                {"name": "contact_prob", "size": 2, "note": "left, right foot"},
+                {"name": "position_std", "size": sk.NUM_JOINTS, "note": "metres, per joint"},
+            ],
+        }  # fmt: skip
+
+    def state_dict(self) -> dict[str, Any]:
+        return self._ready().state_dict()
+
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        self._ready().load_state_dict(state)
+
+
+@retarget.hookimpl
+def register_algorithms(register) -> None:
+    register(Estimator)

@@ -1,0 +1,129 @@
+"""The kinematic pose estimator: samples in the headset frame are exact, NLL training lowers
+the loss on a fixed batch, the uncertainty has one value per joint, a run trains on a sample
+budget and resumes exactly, eval reports it with the policies' metrics, ONNX matches."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from helpers import TINY
+
+from retarget.cli.main import main
+from retarget.env.build import env_from_recipe
+from retarget.learn.estimator import (
+    DEPLOYED_SIZE,
+    DeployedEstimator,
+    EstimatorLearner,
+    EstimatorSettings,
+)
+from retarget.learn.pose_samples import J, mirror_body, mirror_devices, pose_targets, sensor_inputs
+from retarget.recipe import load
+from retarget.registry.loader import load_plugins
+from retarget.train.load import load_run
+
+ESTIMATOR = TINY.replace("name: tiny", "name: est").split("algorithm:")[0] + """\
+algorithm: {type: estimator, window: 4, hidden: [64], batch_size: 64, updates_per_iteration: 2}
+env: {num_envs: 4}
+sim: {threads: 1}
+"""
+
+
+@pytest.fixture(scope="module")
+def env():
+    registry = load_plugins()
+    resolved = load(None, registry, shorthands={"sensors": "three_point"},
+                    assignments=["sensors.0.past=3"])  # fmt: skip
+    return env_from_recipe(resolved, num_envs=1, threads=1)
+
+
+def test_targets_in_the_headset_frame_are_the_clip_joints(env) -> None:
+    """The generated clips have the average proportions, so forward kinematics of the
+    targets reproduces the library's joint positions moved into the headset frame."""
+    rows = torch.arange(0, env.library.num_frames, 37)
+    _, frame = sensor_inputs(env, rows)
+    target = pose_targets(env, rows, frame)
+    expected = frame.points_in(env.library.global_pos[rows])
+    torch.testing.assert_close(target.positions, expected, atol=2e-4, rtol=0)
+    head = frame.points_in(env.library.devices[rows, 0, :3][:, None])[:, 0]
+    assert head[:, :2].abs().max() < 1e-5, "the headset is at the frame's origin"
+    # mirrored samples are mirrored joints (left and right swapped, y flipped)
+    flip = torch.ones(len(rows), dtype=torch.bool)
+    _, mframe = sensor_inputs(env, rows, flip)
+    mirrored = pose_targets(env, rows, mframe, flip).positions
+    from retarget.motion import skeleton as sk
+
+    lr = torch.tensor(sk.LEFT_RIGHT)
+    world = env.library.global_pos[rows][:, lr] * torch.tensor([1.0, -1.0, 1.0])
+    torch.testing.assert_close(mirrored, mframe.points_in(world), atol=2e-4, rtol=0)
+    # mirroring twice changes nothing
+    dev = env.library.devices[rows]
+    torch.testing.assert_close(mirror_devices(mirror_devices(dev)), dev)
+    r, q, c = env.library.root_pos[rows], env.library.local_rot[rows], env.library.contacts[rows]
+    again = mirror_body(*mirror_body(r, q, c.float()))
+    torch.testing.assert_close(again[1], q)
+
+
+def test_nll_training_lowers_the_loss_on_a_fixed_batch(env) -> None:
+    learner = EstimatorLearner(env, EstimatorSettings(hidden=(64,), lr=3e-3),
+                               torch.Generator().manual_seed(0))  # fmt: skip
+    inputs, _, target = learner.sample(256)
+    learner.net.norm.update(inputs)
+    first = float(learner.losses(inputs, target)["loss"].detach())
+    for _ in range(150):
+        parts = learner.losses(inputs, target)
+        learner.optimizer.zero_grad()
+        parts["loss"].backward()
+        learner.optimizer.step()
+    last = learner.losses(inputs, target)
+    assert float(last["loss"].detach()) < first - 1.0, (first, float(last["loss"].detach()))
+    assert float(last["mpjpe_mm"]) < 60.0
+    out = DeployedEstimator(learner.net)(inputs[:5])
+    assert out.shape == (5, DEPLOYED_SIZE) and DEPLOYED_SIZE == 3 + 6 * J + 2 + J
+    std = out[:, -J:]
+    assert (std > 0).all() and torch.isfinite(std).all()
+    probs = out[:, 3 + 6 * J : 3 + 6 * J + 2]
+    assert ((probs >= 0) & (probs <= 1)).all()
+
+
+def test_an_estimator_run_trains_resumes_evaluates_and_exports(tmp_path: Path) -> None:
+    recipe = tmp_path / "est.yaml"
+    recipe.write_text(ESTIMATOR)
+    assert main(["train", str(recipe), "--steps", "256", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    run = tmp_path / "est" / "latest"
+    lock = (run / "recipe.lock.yaml").read_text()
+    assert "past: 3" in lock and "num_envs: 1" in lock  # widened window, no physics envs
+    loaded = load_run(run, load_plugins(), num_envs=2)
+    assert loaded.algorithm.learner.iteration == 2  # 256 samples at 2 x 64 per iteration
+    # resuming adds iterations on top, from the saved optimiser and generator
+    assert main(["train", "--resume", str(run), "--steps", "128", "--no-tensorboard"]) == 0
+    assert load_run(run, load_plugins(), num_envs=2).algorithm.learner.iteration == 3
+
+    report_path = tmp_path / "eval.json"
+    assert main(["eval", str(run), "--every", "60", "--max-seconds", "2",
+                 "--json", str(report_path)]) == 0  # fmt: skip
+    report = json.loads(report_path.read_text())
+    assert report["method"].startswith("kinematic")
+    overall = report["overall"]
+    for key in ("mpjpe_mm", "mpjre_deg", "jerk_km_s3", "foot_skate_mm", "penetration_max_mm",
+                "headset_cm", "controller_cm"):
+        assert key in overall and np.isfinite(overall[key]), key
+
+    # a pose estimator has no actions: play says so instead of failing inside
+    assert main(["play", str(run), "--out", str(tmp_path / "x.png")]) == 2
+
+    ort = pytest.importorskip("onnxruntime")
+    assert main(["export", str(run), "--onnx"]) == 0
+    onnx_path = run / "export" / "policy.onnx"
+    meta = json.loads(onnx_path.with_suffix(".json").read_text())
+    assert meta["kind"] == "pose_estimator" and meta["outputs"][0]["name"] == "root_pos"
+    loaded = load_run(run, load_plugins(), num_envs=2)
+    inputs, _ = sensor_inputs(loaded.env, torch.arange(0, 200, 9))
+    expected = DeployedEstimator(loaded.algorithm.learner.net).eval()(inputs).detach().numpy()
+    (got,) = ort.InferenceSession(str(onnx_path)).run(None, {"obs": inputs.numpy()})
+    assert got.shape == (len(inputs), DEPLOYED_SIZE) and meta["obs_dim"] == inputs.shape[1]
+    np.testing.assert_allclose(got, expected, atol=1e-4, rtol=0)
