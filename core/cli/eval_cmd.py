@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 
 from retarget.cli.numbers import amount, count
 from retarget.cli.run_changes import add_run_change_args
+from retarget.errors import RetargetError
 from retarget.registry import Registry
 
 if TYPE_CHECKING:
@@ -64,6 +65,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--json", dest="json_out", help="where to write the JSON report")
     parser.add_argument("--checkpoint", help="a specific checkpoint file (default: latest)")
+    parser.add_argument(
+        "--estimator",
+        metavar="RUN",
+        help="two-stage: RUN (a pose estimator) turns the devices into a body and this run "
+        "(a full-body imitator) follows it; measured against the true motion",
+    )
     add_run_change_args(parser)
     parser.set_defaults(handler=run)
 
@@ -112,16 +119,37 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     from retarget.cli.console import out
     from retarget.eval import EvalSettings, evaluate
     from retarget.train.load import load_run
-    loaded = load_run(
-        args.run,
-        registry,
-        num_envs=args.num_envs,
-        motions=args.motions,
-        terminations=False,
-        checkpoint=args.checkpoint,
-        scene=args.scene,
-        assignments=args.assignments,
-    )
+
+    def build(clips=None):
+        return load_run(
+            args.run,
+            registry,
+            num_envs=args.num_envs,
+            motions=None if clips is not None else args.motions,
+            clips=clips,
+            terminations=False,
+            checkpoint=args.checkpoint,
+            scene=args.scene,
+            assignments=args.assignments,
+        )
+
+    truth = None
+    if args.estimator:
+        from retarget.eval.ground_truth import GroundTruth
+        from retarget.eval.kinematic import estimate_library
+
+        truth_run = build()
+        motions = args.motions or truth_run.resolved.recipe.motions.path
+        if motions is None:
+            raise RetargetError("--estimator needs --motions: the clips both runs read")
+        source = load_run(args.estimator, registry, num_envs=1, motions=motions)
+        estimator = source.algorithm.pose_estimator()
+        if estimator is None:
+            raise RetargetError(f"--estimator {args.estimator} is not a pose estimator run")
+        loaded = build(estimate_library(source.env, estimator).clips)
+        truth = GroundTruth(truth_run.env, loaded.env)
+    else:
+        loaded = build()
     fall = None
     for comp in loaded.resolved.of_kind("termination"):
         if comp.entry.name == "fall":
@@ -145,7 +173,9 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
 
             kinematic = KinematicRollout(loaded.env, estimate_library(loaded.env, estimator))
         report = evaluate(loaded.env, loaded.algorithm.act, settings, progress, fall=fall,
-                          kinematic=kinematic)  # fmt: skip
+                          kinematic=kinematic, truth=truth)  # fmt: skip
+        if truth is not None:
+            report["method"] = f"two-stage (estimator {args.estimator})"
         if kinematic is not None:
             report["method"] = "kinematic (pose estimator)"
     report["run"] = str(loaded.run)

@@ -21,6 +21,7 @@ import numpy as np
 import torch
 
 from retarget.env import RetargetEnv
+from retarget.eval.ground_truth import GroundTruth
 from retarget.eval.kinematic import KinematicRollout
 from retarget.eval.metrics import MetricProbe
 from retarget.eval.standard import standard_terms
@@ -56,13 +57,15 @@ def evaluate(
     fall: Termination | None = None,
     terms: Sequence[MetricTerm] = (),
     kinematic: KinematicRollout | None = None,
+    truth: GroundTruth | None = None,
 ) -> dict:
     """Metrics per clip and overall (JSON-ready dict); ``fall`` (a bound termination) counts
     falls per minute; ``terms`` are metrics reported after the standard ones.
 
     ``kinematic`` (a pose estimator's :class:`~retarget.eval.kinematic.KinematicRollout`)
     places the character in the estimate each frame instead of stepping ``policy`` (which is
-    then unused), so both kinds of method get the same table.
+    then unused), so both kinds of method get the same table. ``truth`` measures against the
+    true motion when the env's reference is itself an estimate (a two-stage tracker).
 
     ``on_batch(runs_done, runs, clips_done, clips)`` follows progress. Ctrl-C stops after the
     batch being stepped: the report then holds the clips whose runs all finished, and
@@ -87,7 +90,7 @@ def evaluate(
         idx = np.arange(begin, min(begin + n, runs))
         try:
             result, seconds = _run_batch(
-                env, policy, probe, every, cfg, clips, frames, idx, kinematic
+                env, policy, probe, every, cfg, clips, frames, idx, kinematic, truth
             )
         except KeyboardInterrupt:  # keep what is finished; the batch being stepped is lost
             interrupted = True
@@ -112,7 +115,7 @@ def evaluate(
     return report
 
 
-def _run_batch(env, policy, probe, every, cfg, clips, frames, idx, kinematic=None):
+def _run_batch(env, policy, probe, every, cfg, clips, frames, idx, kinematic=None, truth=None):
     """Step the runs ``idx`` together; their per-run values and the wall time it took."""
     n, dt = env.num_envs, env.sim.settings.control_dt
     max_steps = round(cfg.max_seconds / dt)
@@ -136,6 +139,8 @@ def _run_batch(env, policy, probe, every, cfg, clips, frames, idx, kinematic=Non
             else:
                 ctx = kinematic.context(c, f + step + 1, step + 1)
                 pen = kinematic.penetration_at(c, f + step + 1)
+            if truth is not None:
+                ctx = truth.relabel(ctx)
             m = probe(ctx, pen)
             alive = step < available
             ok = alive & (step < failed_at)

@@ -82,8 +82,15 @@ class PoseNet(nn.Module):
             bias[3 + J * 6 + 2 :] = -4.0
             out.bias.copy_(bias)
 
-    def forward(self, obs: torch.Tensor) -> torch.Tensor:
-        return self.mlp(self.norm(obs))
+    def forward(
+        self, obs: torch.Tensor, noise: float = 0.0, generator: torch.Generator | None = None
+    ) -> torch.Tensor:
+        """``noise``: std of Gaussian noise on the normalised inputs (training only), so that
+        the network cannot key on exact device trajectories of the few training clips."""
+        x = self.norm(obs)
+        if noise > 0:
+            x = x + torch.randn(x.shape, generator=generator) * noise
+        return self.mlp(x)
 
     @staticmethod
     def split(flat: torch.Tensor) -> PoseOutput:
@@ -131,6 +138,9 @@ class EstimatorSettings:
     mirror: bool = True
     rot_weight: float = 0.1
     contact_weight: float = 0.1
+    scale_range: float = 0.0
+    input_noise: float = 0.0
+    weight_decay: float = 0.0
 
 
 class EstimatorLearner:
@@ -141,21 +151,28 @@ class EstimatorLearner:
         probe, _ = sensor_inputs(env, env.library.start[:1].clone())
         self.obs_dim = int(probe.shape[1])
         self.net = PoseNet(self.obs_dim, settings.hidden)
-        self.optimizer = torch.optim.Adam(self.net.parameters(), lr=settings.lr)
+        self.optimizer = torch.optim.AdamW(
+            self.net.parameters(), lr=settings.lr, weight_decay=settings.weight_decay
+        )
         self.iteration = 0
 
     def sample(self, n: int) -> tuple[torch.Tensor, HeadsetFrame, PoseTargets]:
         lib = self.env.library
         clip, frame = lib.sample(n, self.generator, margin=0)
         rows = lib.rows(clip, frame)[:, 0]
-        mirrored = None
-        if self.settings.mirror:
-            mirrored = torch.rand(n, generator=self.generator) < 0.5
-        inputs, hf = sensor_inputs(self.env, rows, mirrored)
-        return inputs, hf, pose_targets(self.env, rows, hf, mirrored)
+        s, g = self.settings, self.generator
+        mirrored = torch.rand(n, generator=g) < 0.5 if s.mirror else None
+        scale = None
+        if s.scale_range > 0:
+            scale = 1.0 + (torch.rand(n, generator=g) * 2 - 1) * s.scale_range
+        inputs, hf = sensor_inputs(self.env, rows, mirrored, scale)
+        return inputs, hf, pose_targets(self.env, rows, hf, mirrored, scale)
 
-    def losses(self, inputs: torch.Tensor, target: PoseTargets) -> dict[str, torch.Tensor]:
-        out = PoseNet.split(self.net(inputs))
+    def losses(
+        self, inputs: torch.Tensor, target: PoseTargets, noise: bool = False
+    ) -> dict[str, torch.Tensor]:
+        flat = self.net(inputs, self.settings.input_noise if noise else 0.0, self.generator)
+        out = PoseNet.split(flat)
         pos = forward_kinematics(out.root_pos, out.matrices, target.heights)
         pos_err = (pos - target.positions).square().sum(-1)  # (B, J)
         rot_err = (out.rot6d - target.rot6d).square().sum(-1)
@@ -179,7 +196,7 @@ class EstimatorLearner:
         for _ in range(s.updates_per_iteration):
             inputs, _, target = self.sample(s.batch_size)
             self.net.norm.update(inputs)
-            parts = self.losses(inputs, target)
+            parts = self.losses(inputs, target, noise=True)
             self.optimizer.zero_grad()
             parts["loss"].backward()
             nn.utils.clip_grad_norm_(self.net.parameters(), 1.0)

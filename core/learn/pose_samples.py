@@ -125,9 +125,14 @@ class PoseTargets:
     heights: torch.Tensor  # (B,)
 
 
-def sensor_inputs(env, rows: torch.Tensor, mirrored: torch.Tensor | None = None):
+def sensor_inputs(
+    env, rows: torch.Tensor, mirrored: torch.Tensor | None = None,
+    scale: torch.Tensor | None = None,
+):  # fmt: skip
     """Inputs ``(B, D)`` of the env's sensors at library ``rows`` ``(B,)`` in the headset
-    frame, and that frame. ``mirrored`` ``(B,)`` bool reflects those samples' devices."""
+    frame, and that frame. ``mirrored`` ``(B,)`` bool reflects those samples' devices;
+    ``scale`` ``(B,)`` makes each sample's person that much taller (positions scale about the
+    world origin, so the same motion by a larger or smaller person)."""
     lib = env.library
     clip = torch.searchsorted(lib.start, rows, right=True) - 1
     frame = rows - lib.start[clip]
@@ -135,6 +140,8 @@ def sensor_inputs(env, rows: torch.Tensor, mirrored: torch.Tensor | None = None)
     devices = lib.devices[window]  # (B, W, 3, 7)
     if mirrored is not None and bool(mirrored.any()):
         devices = torch.where(mirrored[:, None, None, None], mirror_devices(devices), devices)
+    if scale is not None:
+        devices = torch.cat([devices[..., :3] * scale[:, None, None, None], devices[..., 3:]], -1)
     now = devices[:, env.window_offsets.index(0), 0]
     frame_of = HeadsetFrame.of(now)
     pose = env.reference.pose(rows)
@@ -153,9 +160,11 @@ def sensor_inputs(env, rows: torch.Tensor, mirrored: torch.Tensor | None = None)
 
 
 def pose_targets(
-    env, rows: torch.Tensor, frame: HeadsetFrame, mirrored: torch.Tensor | None = None
-) -> PoseTargets:
-    """The reference body at ``rows`` in the headset ``frame`` (mirrored where asked)."""
+    env, rows: torch.Tensor, frame: HeadsetFrame, mirrored: torch.Tensor | None = None,
+    scale: torch.Tensor | None = None,
+) -> PoseTargets:  # fmt: skip
+    """The reference body at ``rows`` in the headset ``frame`` (mirrored and scaled as the
+    inputs were)."""
     lib = env.library
     root_pos, local_rot = lib.root_pos[rows], lib.local_rot[rows]
     contacts = lib.contacts[rows].float()
@@ -166,6 +175,8 @@ def pose_targets(
         contacts = torch.where(mirrored[:, None], m_con, contacts)
     clip = torch.searchsorted(lib.start, rows, right=True) - 1
     heights = lib.heights[clip].float()
+    if scale is not None:
+        root_pos, heights = root_pos * scale[:, None], heights * scale
     local_rot = local_rot.clone()
     local_rot[:, 0] = frame.quat_in(local_rot[:, 0])
     root = frame.points_in(root_pos)

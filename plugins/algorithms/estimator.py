@@ -39,6 +39,13 @@ class EstimatorConfig(PluginConfig):
     mirror: bool = Field(True, description="mirror half of each batch (left/right swapped)")
     rot_weight: float = Field(0.1, ge=0, description="weight of the rotations' NLL")
     contact_weight: float = Field(0.1, ge=0, description="weight of the contacts' BCE")
+    scale_range: float = Field(
+        0.1, ge=0, le=0.5, description="each sample's person scaled by 1 +- this (body sizes)"
+    )
+    input_noise: float = Field(
+        0.1, ge=0, le=2, description="std of noise on the normalised inputs while training"
+    )
+    weight_decay: float = Field(1e-4, ge=0, le=1, description="AdamW weight decay")
 
 
 class Estimator(Algorithm):
@@ -99,6 +106,8 @@ class Estimator(Algorithm):
             hidden=tuple(cfg.hidden), lr=cfg.learning_rate, batch_size=cfg.batch_size,
             updates_per_iteration=cfg.updates_per_iteration, mirror=cfg.mirror,
             rot_weight=cfg.rot_weight, contact_weight=cfg.contact_weight,
+            scale_range=cfg.scale_range, input_noise=cfg.input_noise,
+            weight_decay=cfg.weight_decay,
         )  # fmt: skip
         self.learner = EstimatorLearner(env, settings, generator or torch.Generator())
 
