@@ -27,6 +27,12 @@ class MotionFormat(Plugin):
     @abstractmethod
     def read(self, path: Path) -> MotionClip: ...
 
+    def accepts(self, path: Path) -> bool:
+        """Whether this reader is the one for ``path`` among the formats sharing its suffix
+        (AMASS and position arrays are both ``.npz``): a cheap look inside, never a full
+        read. The default takes every file with a matching suffix."""
+        return True
+
     @classmethod
     @abstractmethod
     def write_sample(cls, directory: Path) -> Path:

@@ -48,11 +48,15 @@ def resolve_motion_source(
 
 
 def reader_for(path: Path, formats: Mapping[str, MotionFormat]) -> MotionFormat:
-    """The motion format whose suffixes match ``path``; the error lists the known suffixes."""
+    """The motion format whose suffixes match ``path`` (and that accepts it, when several
+    share the suffix); the error lists the known suffixes."""
     suffix = path.suffix.lower()
-    for fmt in formats.values():
-        if suffix in (s.lower() for s in fmt.suffixes):
+    matching = [f for f in formats.values() if suffix in (s.lower() for s in f.suffixes)]
+    for fmt in matching:
+        if fmt.accepts(path):
             return fmt
+    if matching:  # none recognises the content: the first reads it and says what is wrong
+        return matching[0]
     known = sorted({s for f in formats.values() for s in f.suffixes})
     raise MotionError(
         f"no motion format reads '{suffix}' files; known: {', '.join(known)}", file=path

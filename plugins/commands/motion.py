@@ -16,8 +16,31 @@ if TYPE_CHECKING:
     from retarget.motion.clip import MotionClip
 
 
+def _add_format_args(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--format", dest="motion_format", metavar="NAME",
+                        help="read with this motion format (default: by suffix)")  # fmt: skip
+    parser.add_argument("--joints", metavar="NAMES.txt",
+                        help="position-only files: joint names, one per line")  # fmt: skip
+    parser.add_argument("--fps", dest="source_fps", type=float,
+                        help="position-only files: the capture's frame rate")  # fmt: skip
+
+
 def _formats(args: argparse.Namespace) -> dict:
     registry = getattr(args, "registry", None)
+    chosen = getattr(args, "motion_format", None)
+    joints, fps = getattr(args, "joints", None), getattr(args, "source_fps", None)
+    if chosen is None and (joints is not None or fps is not None):
+        chosen = "positions"
+    if chosen is not None:
+        from retarget.registry.loader import load_plugins
+
+        entry = (registry or load_plugins()).get("motion_format", chosen)
+        settings = {k: v for k, v in (("joints", joints), ("fps", fps)) if v is not None}
+        try:
+            config = entry.cls.Config.model_validate(settings)
+        except ValueError as exc:
+            raise RetargetError(f"--format {chosen}: {exc}") from None
+        return {chosen: entry.cls(config)}
     if registry is None:
         from retarget.motion.sources import default_formats
 
@@ -53,8 +76,10 @@ class MotionCommand(Command):
         sub = parser.add_subparsers(dest="motion_action", metavar="ACTION", required=True)
         inspect = sub.add_parser("inspect", help="table of clip facts")
         inspect.add_argument("files", nargs="+", metavar="FILE", help="motion files to describe")
+        _add_format_args(inspect)
         show = sub.add_parser("show", help="render a clip to .png (frame grid) or .mp4")
         show.add_argument("file", metavar="FILE", help="the motion file to draw")
+        _add_format_args(show)
         show.add_argument("--out", required=True, help="output .png or .mp4")
         show.add_argument("--frames", type=count(1, 64), default=8, help="frames in a .png grid")
         show.add_argument(
@@ -86,6 +111,7 @@ class MotionCommand(Command):
             "record", help="write what a headset would record of a clip (.jsonl [+ frames])"
         )
         rec.add_argument("file", metavar="FILE", help="the motion file the person performs")
+        _add_format_args(rec)
         rec.add_argument("--out", required=True, help="output .jsonl (frames: NAME.frames.npz)")
         rec.add_argument(
             "--cameras", choices=("quest2", "aria"), help="also record this rig's camera frames"
