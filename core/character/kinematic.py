@@ -80,6 +80,14 @@ def root_height_ratio(model: mujoco.MjModel, clip: MotionClip) -> float:
     return float(model.qpos0[2]) / sk.standing_pelvis_height(clip.offsets)
 
 
+def scaled_clip(clip: MotionClip, scale: float) -> MotionClip:
+    """The clip as a person ``scale`` times the size would perform it about the world origin
+    (root path and bones scaled): where the character's reference goes, so props placed from
+    it (or given in the clip's frame and scaled by ``meta["scale"]``) fit the character."""
+    return clip.with_(root_pos=clip.root_pos * scale, offsets=clip.offsets * scale,
+                      meta={**clip.meta, "scale": scale})  # fmt: skip
+
+
 @dataclass
 class KinematicMotion:
     """A retargeted clip: character ``qpos (T, nq)`` at the clip's rate, and what was clipped."""

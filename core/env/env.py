@@ -31,6 +31,7 @@ import mujoco
 import numpy as np
 import torch
 
+from retarget.character.kinematic import root_height_ratio, scaled_clip
 from retarget.env.managers import RewardManager, TerminationManager
 from retarget.env.observation_manager import ObservationManager, PluginSource
 from retarget.env.observations import Privileged, Proprio
@@ -68,16 +69,19 @@ class RetargetEnv:
         sim = sim or SimSettings()
         self.num_envs = n = opts.num_envs
         self.character, self.scene = character, scene
-        if scene is not None:
-            scene.fit_motion(clips)  # props placed from the motions come before the build
+        if scene is not None:  # props placed from the motions come before the build, at the
+            # character's scale (its reference root path is scaled by the same ratio)
+            rest = character.build_spec().compile()
+            scene.fit_motion([scaled_clip(c, root_height_ratio(rest, c)) for c in clips])
         self.world = build_world(character, scene)
         self.layout = layout = self.world.layout
         hz = sim.control_hz
         clips = [resample(c, hz) for c in clips]
         self.library = MotionLibrary(clips, fps=hz)
-        self.reference = CharacterReference(character, self.world.model, layout, clips)
-        self.sim = BatchedSim(self.world.model, layout, n, sim)
         self._mocap_ids = self._scene_mocap_ids()
+        self.reference = CharacterReference(character, self.world.model, layout, clips,
+                                            mocap=self._clip_placements(len(clips)))  # fmt: skip
+        self.sim = BatchedSim(self.world.model, layout, n, sim)
         self.sensors, self.observers = list(sensors), list(observers)
         for plugin in (*self.sensors, *self.observers):
             plugin.bind(layout)
@@ -142,6 +146,23 @@ class RetargetEnv:
     def step_needs(self) -> StepNeeds:
         """What each step gathers beyond the state and the reference pose."""
         return self._needs
+
+    def _clip_placements(self, count: int) -> list[tuple[np.ndarray, np.ndarray] | None] | None:
+        """Every mocap body's pose per clip where the scene places its props per clip."""
+        if self.scene is None or not self._mocap_ids.size:
+            return None
+        model = self.world.model
+        data = mujoco.MjData(model)
+        out: list[tuple[np.ndarray, np.ndarray] | None] = []
+        for c in range(count):
+            placed = self.scene.reference_placement(c)
+            if placed is None:
+                out.append(None)
+                continue
+            pos, quat = data.mocap_pos.copy(), data.mocap_quat.copy()
+            pos[self._mocap_ids], quat[self._mocap_ids] = placed[0].numpy(), placed[1].numpy()
+            out.append((pos, quat))
+        return out
 
     def _scene_mocap_ids(self) -> np.ndarray:
         """Indices into ``mocap_pos`` of the scene's props, resolved once; sizes the scene's

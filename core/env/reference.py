@@ -9,6 +9,7 @@ flat arrays with the library's ``(N,)`` row indices: no kinematics and no loops 
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 
 import mujoco
@@ -46,7 +47,10 @@ class CharacterReference:
         layout: Layout,
         clips: Sequence[MotionClip],
         contact_margin: float = DEFAULT_MARGIN,
+        mocap: Sequence[tuple[np.ndarray, np.ndarray] | None] | None = None,
     ) -> None:
+        """``mocap``: per clip, every mocap body's position and quaternion while its scene
+        contacts are labelled (None: the compiled placement)."""
         joint_map = character.joint_map()
         if joint_map is None:
             raise PluginError(
@@ -91,7 +95,14 @@ class CharacterReference:
         ang, lin = body_velocities(cvel, arrays["body_pos"], com)
         # which body groups touch the (un-randomized) scene, per frame: the contact reward's
         # and the evaluation's labels
-        labels = scene_contact_labels(model, layout, qpos, contact_margin)
+        if mocap is None or all(m is None for m in mocap):
+            labels = scene_contact_labels(model, layout, qpos, contact_margin)
+        else:
+            bounds = np.cumsum([0] + [len(p) for p in qpos_parts])
+            labels = np.concatenate([
+                scene_contact_labels(model, layout, qpos[a:b], contact_margin, mocap[c])
+                for c, (a, b) in enumerate(itertools.pairwise(bounds))
+            ])  # fmt: skip
         self.scene_contacts = torch.as_tensor(labels, dtype=torch.bool)
         # the character's block only: joints of articulated scene props follow it and keep
         # their defaults at resets

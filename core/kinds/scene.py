@@ -100,6 +100,13 @@ class Scene(Plugin):
     def load_state_dict(self, state: Mapping[str, torch.Tensor]) -> None:
         """Restore :meth:`state_dict` (static scenes ignore this)."""
 
+    def reference_placement(self, clip: int) -> tuple[torch.Tensor, torch.Tensor] | None:
+        """Positions ``(M, 3)`` and ``wxyz`` quaternions ``(M, 4)`` of the mocap bodies while
+        clip ``clip``'s reference is labelled (its scene contacts): a scene whose props
+        differ per clip says where they stand for that clip. ``None`` (the default): the
+        compiled placement serves every clip."""
+        return None
+
     def mocap_bodies(self) -> tuple[str, ...]:
         """Names of the mocap bodies whose poses :meth:`mocap_poses` gives, in that order."""
         return ()

@@ -141,6 +141,7 @@ class EstimatorSettings:
     scale_range: float = 0.0
     input_noise: float = 0.0
     weight_decay: float = 0.0
+    lost_controllers: float = 0.0
 
 
 class EstimatorLearner:
@@ -165,7 +166,13 @@ class EstimatorLearner:
         scale = None
         if s.scale_range > 0:
             scale = 1.0 + (torch.rand(n, generator=g) * 2 - 1) * s.scale_range
-        inputs, hf = sensor_inputs(self.env, rows, mirrored, scale)
+        frozen = None
+        if s.lost_controllers > 0:  # lost from a random entry of the window on
+            w = len(self.env.window_offsets)
+            lost = torch.rand(n, 2, generator=g) < s.lost_controllers
+            start = torch.randint(0, w, (n, 2), generator=g)
+            frozen = torch.where(lost, start, torch.full_like(start, w))
+        inputs, hf = sensor_inputs(self.env, rows, mirrored, scale, frozen)
         return inputs, hf, pose_targets(self.env, rows, hf, mirrored, scale)
 
     def losses(

@@ -127,12 +127,15 @@ class PoseTargets:
 
 def sensor_inputs(
     env, rows: torch.Tensor, mirrored: torch.Tensor | None = None,
-    scale: torch.Tensor | None = None,
+    scale: torch.Tensor | None = None, frozen_from: torch.Tensor | None = None,
 ):  # fmt: skip
     """Inputs ``(B, D)`` of the env's sensors at library ``rows`` ``(B,)`` in the headset
     frame, and that frame. ``mirrored`` ``(B,)`` bool reflects those samples' devices;
     ``scale`` ``(B,)`` makes each sample's person that much taller (positions scale about the
-    world origin, so the same motion by a larger or smaller person)."""
+    world origin, so the same motion by a larger or smaller person); ``frozen_from``
+    ``(B, 2)`` holds each controller (left, right) still from that entry of the window on (an
+    index past the window: not at all), as a headset runtime reports a hand that left its
+    cameras' view."""
     lib = env.library
     clip = torch.searchsorted(lib.start, rows, right=True) - 1
     frame = rows - lib.start[clip]
@@ -142,6 +145,13 @@ def sensor_inputs(
         devices = torch.where(mirrored[:, None, None, None], mirror_devices(devices), devices)
     if scale is not None:
         devices = torch.cat([devices[..., :3] * scale[:, None, None, None], devices[..., 3:]], -1)
+    w = devices.shape[1]
+    if frozen_from is not None and bool((frozen_from < w).any()):
+        start = frozen_from.clamp(max=w - 1)  # (B, 2)
+        held = torch.gather(devices[:, :, 1:], 1, start[:, None, :, None].expand(-1, 1, -1, 7))
+        after = torch.arange(w)[None, :, None] >= frozen_from[:, None, :]  # (B, W, 2)
+        devices = devices.clone()
+        devices[:, :, 1:] = torch.where(after[..., None], held, devices[:, :, 1:])
     now = devices[:, env.window_offsets.index(0), 0]
     frame_of = HeadsetFrame.of(now)
     pose = env.reference.pose(rows)

@@ -39,12 +39,27 @@ def resolve_motion_source(
         return [p]
     if not p.exists():
         raise MotionError(f"motion path does not exist ({origin})", file=p)
-    files = sorted(f for f in p.rglob("*") if f.is_file() and f.suffix.lower() in wanted)
+    files = sorted(f for f in _walk(p) if f.suffix.lower() in wanted)
     if not files:
         raise MotionError(
             f"no motion files ({', '.join(wanted)}) under this directory ({origin})", file=p
         )
     return files
+
+
+def _walk(root: Path) -> list[Path]:
+    """Every file under ``root``, following linked folders (a dataset is often a folder of
+    links to another disk) but visiting each real folder once, so a link loop ends."""
+    seen: set[str] = set()
+    out: list[Path] = []
+    for folder, dirs, names in os.walk(root, followlinks=True):
+        real = os.path.realpath(folder)
+        if real in seen:
+            dirs[:] = []
+            continue
+        seen.add(real)
+        out.extend(Path(folder) / n for n in names if (Path(folder) / n).is_file())
+    return out
 
 
 def reader_for(path: Path, formats: Mapping[str, MotionFormat]) -> MotionFormat:

@@ -53,9 +53,11 @@ def scene_contact_labels(
     layout: Layout,
     qpos: np.ndarray,
     margin: float = DEFAULT_MARGIN,
+    mocap: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
     """``(T, G)`` bool labels of full-model poses ``qpos`` ``(T, model.nq)``, one column per
-    body group of ``layout`` (see the module doc)."""
+    body group of ``layout`` (see the module doc); ``mocap``: every mocap body's position and
+    quaternion for these poses (default: the compiled placement)."""
     import mujoco
     import numpy as np
     m = copy.deepcopy(model)  # margins only for labelling, not in the simulated model
@@ -66,6 +68,8 @@ def scene_contact_labels(
     m.geom_gap[mine] = 0.0
     member = group_matrix(m, layout)
     data = mujoco.MjData(m)
+    if mocap is not None:
+        data.mocap_pos[:], data.mocap_quat[:] = mocap
     out = np.zeros((len(qpos), member.shape[1]), dtype=bool)
     for f in range(len(qpos)):  # preprocessing, once per library frame
         data.qpos[:] = qpos[f]

@@ -261,15 +261,20 @@ class BatchedSim:
                 deepest[i], mean[i] = depth.max(), depth.mean()
         return deepest, mean
 
-    def pose_penetration(self, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def pose_penetration(
+        self, qpos: np.ndarray, mocap: tuple[np.ndarray, np.ndarray] | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Like :meth:`penetration`, for kinematic poses ``(R, nq)`` of the character (scene
-        joints and props at their default placement): how deep a pose estimate puts the body
+        joints at their defaults, props at ``mocap`` (every mocap body's position and
+        quaternion) or their compiled placement): how deep a kinematic pose puts the body
         into the floor and props, without stepping physics. One collision pass per pose."""
         if self._scratch is None:
             self._scratch = mujoco.MjData(self.model)
         data, nq = self._scratch, qpos.shape[1]
         deepest, mean = np.zeros(len(qpos)), np.zeros(len(qpos))
         mujoco.mj_resetData(self.model, data)
+        if mocap is not None:
+            data.mocap_pos[:], data.mocap_quat[:] = mocap
         for i in range(len(qpos)):  # an evaluation metric, once per estimated frame
             data.qpos[:nq] = qpos[i]
             mujoco.mj_fwdPosition(self.model, data)

@@ -46,6 +46,10 @@ class EstimatorConfig(PluginConfig):
         0.1, ge=0, le=2, description="std of noise on the normalised inputs while training"
     )
     weight_decay: float = Field(1e-4, ge=0, le=1, description="AdamW weight decay")
+    lost_controllers: float = Field(
+        0.1, ge=0, le=1, description="chance per controller and sample that it is held still "
+        "over the window (tracking lost), so the hands' uncertainty learns to rise then",
+    )  # fmt: skip
 
 
 class Estimator(Algorithm):
@@ -107,7 +111,7 @@ class Estimator(Algorithm):
             updates_per_iteration=cfg.updates_per_iteration, mirror=cfg.mirror,
             rot_weight=cfg.rot_weight, contact_weight=cfg.contact_weight,
             scale_range=cfg.scale_range, input_noise=cfg.input_noise,
-            weight_decay=cfg.weight_decay,
+            weight_decay=cfg.weight_decay, lost_controllers=cfg.lost_controllers,
         )  # fmt: skip
         self.learner = EstimatorLearner(env, settings, generator or torch.Generator())
 

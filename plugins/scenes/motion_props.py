@@ -5,14 +5,19 @@ For every clip of the run, in this order of precedence:
 1. ``clips.NAME`` in the scene's config (a recipe field): the clip's props, listed;
 2. a sidecar ``CLIP.scene.yaml`` next to the clip's motion file (``walk.bvh`` ->
    ``walk.scene.yaml``) holding ``props: [...]`` in the same form;
-3. with ``auto: true`` (the default), the props fitted to the motion
+3. the scene recorded with the clip: an ``.obj`` (or ``.ply``/``.glb``) in the clip file's own
+   folder, each closed piece an upright box (:mod:`retarget.scene.mesh_boxes`; the box-climb
+   captures keep ``multi_boxes.obj`` beside each sequence), with ``meshes: true``;
+4. with ``auto: true`` (the default), the props fitted to the motion
    (:mod:`retarget.motion.scene_fit`): a seat under a pelvis that is low and still for 0.5 s,
    boxes under feet that rest above the floor.
 
 A prop is ``{kind: seat|box, position: [x, y], yaw, height, size: [x, y]}``: a box standing
 on the floor with its top at ``height``. All clips' props go into one world (clips recorded
 in one room share its coordinates); props of different clips that overlap are the user's to
-sort out through ``clips`` or sidecars. The props are mocap bodies like every other prop
+sort out through ``clips`` or sidecars, or with ``per_clip: true``: then an episode sees only
+its own clip's props (the others are parked far away), and identical props of several clips
+(within 2 cm and 0.02 rad) are one prop they share. The props are mocap bodies like every other prop
 scene's, randomized per episode (Sec. 3.4), and the reference contact labels are computed
 against their un-randomized placement.
 """
@@ -54,7 +59,11 @@ class MotionPropsConfig(PluginConfig):
         default_factory=dict, description="clip name -> its props (wins over sidecar and auto)"
     )
     sidecar: bool = Field(True, description="read CLIP.scene.yaml next to a clip's motion file")
+    meshes: bool = Field(True, description="read the boxes of a mesh beside a clip's file")
     auto: bool = Field(True, description="fit seats and boxes to clips without given props")
+    per_clip: bool = Field(
+        False, description="an episode sees only its clip's props (others parked far away)"
+    )
     density: float = Field(500.0, gt=0, description="kg/m^3 of every part (uniform density)")
     randomize: Randomization = Field(default_factory=Randomization)
 
@@ -84,6 +93,42 @@ def _spec(p: FittedProp) -> PropSpec:
     return PropSpec(kind=p.kind, position=p.position, yaw=p.yaw, height=p.height, size=p.size)
 
 
+MESH_SUFFIXES = (".obj", ".ply", ".glb")
+PARK = (-50.0, -50.0)
+"""Where props of other clips stand during an episode (``per_clip``): far from any motion."""
+
+
+def mesh_beside(source: Path) -> Path | None:
+    """The one scene mesh in a clip file's folder, if there is exactly one."""
+    found = sorted(p for p in source.parent.iterdir() if p.suffix.lower() in MESH_SUFFIXES)
+    if len(found) > 1:
+        raise PluginError(
+            f"several scene meshes beside the clip ({', '.join(p.name for p in found)})",
+            file=source, plugin="scene motion_props", hint="keep one per clip folder",
+        )  # fmt: skip
+    return found[0] if found else None
+
+
+def mesh_specs(path: Path) -> tuple[PropSpec, ...]:
+    from retarget.scene.mesh_boxes import boxes_from_mesh
+
+    return tuple(PropSpec(kind="box", position=b.position, yaw=b.yaw, height=b.height,
+                          size=b.size) for b in boxes_from_mesh(path))  # fmt: skip
+
+
+def _scaled(p: PropSpec, k: float) -> PropSpec:
+    """A prop given in the clip's frame moved to the character's scale (see
+    ``scaled_clip``): positions, extents and height times ``k``."""
+    return p.model_copy(update={"position": (p.position[0] * k, p.position[1] * k),
+                                "size": (p.size[0] * k, p.size[1] * k), "height": p.height * k})
+
+
+def _same(a: PropSpec, b: PropSpec) -> bool:
+    return (a.kind == b.kind and abs(a.height - b.height) < 0.02 and abs(a.yaw - b.yaw) < 0.02
+            and max(abs(x - y) for x, y in zip(a.position + a.size, b.position + b.size,
+                                               strict=True)) < 0.02)  # fmt: skip
+
+
 class MotionProps(PropScene):
     """Seats and boxes where the motions need them: listed, from sidecars, or fitted."""
 
@@ -91,28 +136,95 @@ class MotionProps(PropScene):
     Config = MotionPropsConfig
 
     def __init__(self, config: PluginConfig | None = None) -> None:
+        import torch
+
         self._specs: list[tuple[str, PropSpec]] = []
+        self._owners = torch.zeros(0, 0, dtype=torch.bool)  # (clips, props): who sees what
+        self._episode_clip = torch.zeros(0, dtype=torch.long)
         super().__init__(config)
 
     def fit_motion(self, clips: Sequence[MotionClip]) -> None:
         from retarget.motion.scene_fit import fit_props
         cfg: MotionPropsConfig = self.config  # type: ignore[assignment]
+        import torch
+
         specs: list[tuple[str, PropSpec]] = []
-        for clip in clips:
+        owners: list[set[int]] = []
+        for c, clip in enumerate(clips):
+            mesh = None
+            if cfg.meshes and clip.source is not None and clip.source.parent.is_dir():
+                mesh = mesh_beside(clip.source)
+            fitted = False
             if clip.name in cfg.clips:
                 found = cfg.clips[clip.name]
             elif cfg.sidecar and clip.source is not None and sidecar_path(clip.source).exists():
                 found = read_sidecar(sidecar_path(clip.source))
+            elif mesh is not None:
+                found = mesh_specs(mesh)
             elif cfg.auto:
-                found = tuple(_spec(p) for p in fit_props(clip))
+                found, fitted = tuple(_spec(p) for p in fit_props(clip)), True
             else:
                 found = ()
-            specs.extend((clip.name, s) for s in found)
+            scale = float(clip.meta.get("scale", 1.0))  # type: ignore[arg-type]
+            if scale != 1.0 and not fitted:  # given in the clip's frame: to the character's
+                found = tuple(_scaled(s, scale) for s in found)
+            for spec in found:
+                same = next((i for i, (_, s) in enumerate(specs) if _same(s, spec)), None)
+                if cfg.per_clip and same is not None:
+                    owners[same].add(c)
+                    continue
+                specs.append((clip.name, spec))
+                owners.append({c})
         self._specs = specs
+        self._owners = torch.zeros(len(clips), len(specs), dtype=torch.bool)
+        for p, who in enumerate(owners):
+            self._owners[list(who), p] = True
         self._props = self.placed_props()
         self._tables = self._flatten()
         if self._allocated:  # placements of the old props mean nothing for the new ones
             self.allocate(self._offsets.shape[0])
+
+    def allocate(self, num_envs: int) -> None:
+        import torch
+
+        super().allocate(num_envs)
+        self._episode_clip = torch.full((num_envs,), -1, dtype=torch.long)
+
+    def start_episodes(self, env_ids, clip, seconds) -> None:
+        if not self._allocated:
+            self.allocate(int(env_ids.max()) + 1)
+        self._episode_clip[env_ids] = clip.long()
+
+    def randomize(self, env_ids, generator) -> None:
+        """The configured noise, then (``per_clip``) other clips' props parked."""
+        import torch
+
+        super().randomize(env_ids, generator)
+        cfg: MotionPropsConfig = self.config  # type: ignore[assignment]
+        if not cfg.per_clip or not self._specs or env_ids.numel() == 0:
+            return
+        clip = self._episode_clip[env_ids]
+        seen = torch.where(clip[:, None] >= 0, self._owners[clip.clamp(min=0)], True)
+        base = self._tables.base[:, :2]  # (P, 2)
+        park = torch.tensor(PARK, dtype=base.dtype) - base
+        offsets = self._offsets[env_ids]
+        offsets[..., :2] = torch.where(seen[..., None], offsets[..., :2], park)
+        self._offsets[env_ids] = offsets
+
+    def reference_placement(self, clip: int):
+        """With ``per_clip``: the clip's own props where they stand, the others parked."""
+        import torch
+
+        from retarget.geometry.heading import yaw_quat
+
+        cfg: MotionPropsConfig = self.config  # type: ignore[assignment]
+        if not cfg.per_clip or not self._specs or clip >= self._owners.shape[0]:
+            return None
+        base = self._tables.base  # (P, 3): x, y, yaw
+        pos = torch.cat([base[:, :2], torch.zeros_like(base[:, :1])], dim=-1)
+        seen = self._owners[clip]
+        pos[~seen, :2] = torch.tensor(PARK, dtype=pos.dtype)
+        return pos, yaw_quat(base[:, 2])
 
     def props(self) -> list[Prop]:
         out = []

@@ -159,3 +159,17 @@ def test_two_stage_eval_follows_the_estimate_and_measures_the_truth(tmp_path: Pa
     # a policy run given as the estimator is refused by name
     assert main(["eval", str(tmp_path / "teacher" / "latest"), *common,
                  "--estimator", str(tmp_path / "teacher" / "latest")]) == 2  # fmt: skip
+
+
+def test_lost_controllers_change_only_what_the_sensors_see(env) -> None:
+    rows = torch.arange(10, 200, 17)
+    w = len(env.window_offsets)
+    plain, _ = sensor_inputs(env, rows)
+    none, _ = sensor_inputs(env, rows, frozen_from=torch.full((len(rows), 2), w))
+    torch.testing.assert_close(none, plain)
+    lost, frame = sensor_inputs(env, rows, frozen_from=torch.zeros(len(rows), 2, dtype=torch.long))
+    assert not torch.allclose(lost, plain)
+    # the targets do not depend on what the devices reported
+    plain_frame = sensor_inputs(env, rows)[1]
+    torch.testing.assert_close(pose_targets(env, rows, frame).positions,
+                               pose_targets(env, rows, plain_frame).positions)  # fmt: skip
