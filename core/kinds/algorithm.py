@@ -44,6 +44,10 @@ class Algorithm(Plugin):
     """
 
     kind: ClassVar[str] = "algorithm"
+    kinematic: ClassVar[bool] = False
+    """True for a method that learns from the motion library instead of acting (a pose
+    estimator): it needs a retarget environment (library, sensors), and the contract suite
+    checks its :meth:`pose_estimator` instead of :meth:`act`."""
 
     @abstractmethod
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None: ...

@@ -18,6 +18,7 @@ the mean AMASS subject's 1.70 m (:data:`MEAN_HEIGHT`), and the pelvis is placed 
 
 from __future__ import annotations
 
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -93,7 +94,7 @@ def load_amass(
             rate = _scalar(data, ("mocap_framerate", "mocap_frame_rate"))
             gender = str(np.asarray(data["gender"]).reshape(())) if "gender" in data \
                 else "neutral"  # fmt: skip
-    except (OSError, ValueError, TypeError) as exc:
+    except (OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile) as exc:
         raise MotionError(f"cannot read AMASS file: {exc}", file=file) from None
     rate = fps if fps is not None else rate
     if rate is None:

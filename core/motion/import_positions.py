@@ -10,6 +10,7 @@ are fitted by :mod:`retarget.motion.fit_positions`. Every failure is a
 
 from __future__ import annotations
 
+import zipfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -58,7 +59,7 @@ def _load_arrays(path: Path) -> tuple[np.ndarray, list[str] | None, float | None
         else:
             pos = np.load(path, allow_pickle=False)
             names, fps = None, None
-    except (OSError, ValueError, TypeError) as exc:
+    except (OSError, ValueError, TypeError, EOFError, zipfile.BadZipFile) as exc:
         raise MotionError(f"cannot read positions: {exc}", file=path) from None
     return pos, names, fps
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import struct
 import zlib
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +45,7 @@ _LEFT = (0.2, 0.4, 0.9, 1.0)
 _RIGHT = (0.9, 0.25, 0.2, 1.0)
 _MID = (0.55, 0.55, 0.55, 1.0)
 _DEVICE = (1.0, 0.85, 0.1, 1.0)
+_BOX = (0.62, 0.5, 0.38, 0.85)
 
 
 def _color(j: int) -> tuple[float, ...]:
@@ -59,8 +61,10 @@ def add_decor_geom(
     at: np.ndarray,
     rgba: tuple[float, ...],
     to: np.ndarray | None = None,
+    mat: np.ndarray | None = None,
 ) -> None:
-    """Append one decorative geom (a connector capsule when ``to`` is given) to a scene."""
+    """Append one decorative geom (a connector capsule when ``to`` is given; turned by
+    ``mat`` otherwise) to a scene."""
     if scene.ngeom >= scene.maxgeom:
         return
     geom = scene.geoms[scene.ngeom]
@@ -69,7 +73,7 @@ def add_decor_geom(
         kind,
         np.array(size + [0.0] * (3 - len(size))),
         at,
-        np.eye(3).ravel(),
+        (np.eye(3) if mat is None else np.asarray(mat, dtype=np.float64)).ravel(),
         np.array(rgba, dtype=np.float32),
     )
     if to is not None:
@@ -86,12 +90,14 @@ def render_frames(
     azimuth: float | None = None,
     view: str = "side",
     devices: bool = True,
+    boxes: Sequence = (),
 ) -> np.ndarray:
     """RGB images ``(K, height, width, 3)`` of the given frames, camera following the pelvis.
 
     ``view="side"`` looks at the body from its side relative to the clip's direction of travel
     (so walking goes left to right in the picture), ``"front"`` from straight ahead;
-    ``azimuth`` in degrees (MuJoCo's free camera) overrides both.
+    ``azimuth`` in degrees (MuJoCo's free camera) overrides both. ``boxes``: the scene's
+    upright boxes (``position``, ``yaw``, ``size``, ``height``: e.g. a clip's recorded props).
     """
     import mujoco
 
@@ -122,7 +128,11 @@ def render_frames(
         radius = 0.03 * clip.height / sk.REFERENCE_HEIGHT
         for f in frames:
             p = pos[f]
-            cam.lookat[:] = [p[0, 0], p[0, 1], 0.85 * clip.height / sk.REFERENCE_HEIGHT]
+            # at the pelvis's height over what it stands on: 0.85 m for a standing 1.75 m
+            # adult on the floor, higher on a box top
+            stand = 0.85 * clip.height / sk.REFERENCE_HEIGHT
+            lift = max(0.0, p[0, 2] - sk.standing_pelvis_height(clip.offsets))
+            cam.lookat[:] = [p[0, 0], p[0, 1], stand + lift]
             renderer.update_scene(data, camera=cam)
             scene = renderer.scene
 
@@ -136,6 +146,13 @@ def render_frames(
             ) -> None:
                 add_decor_geom(mujoco, scene, kind, size, at, rgba, to)
 
+            for box in boxes:
+                c, s_ = np.cos(box.yaw), np.sin(box.yaw)
+                turn = np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]])
+                centre = np.array([box.position[0], box.position[1], box.height / 2])
+                half = [box.size[0] / 2, box.size[1] / 2, box.height / 2]
+                add_decor_geom(mujoco, scene, mujoco.mjtGeom.mjGEOM_BOX, half, centre, _BOX,
+                               mat=turn)  # fmt: skip
             for j in range(1, sk.NUM_JOINTS):
                 a, b = p[sk.PARENTS[j]], p[j]
                 if np.linalg.norm(b - a) > 1e-4:

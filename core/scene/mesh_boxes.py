@@ -103,3 +103,18 @@ def boxes_from_mesh(path: str | Path) -> list[MeshBox]:
         out.append(MeshBox((float(centre[0]), float(centre[1])), float(yaw),
                            (float(size[0]), float(size[1])), top, fill))  # fmt: skip
     return out
+
+
+MESH_SUFFIXES = (".obj", ".ply", ".glb")
+
+
+def mesh_beside(source: Path) -> Path | None:
+    """The one scene mesh in a clip file's folder (the box-climb layout: a sequence's
+    ``multi_boxes.obj`` next to its joint positions), or None; several is an error."""
+    found = sorted(p for p in source.parent.iterdir() if p.suffix.lower() in MESH_SUFFIXES)
+    if len(found) > 1:
+        raise PluginError(
+            f"several scene meshes beside the clip ({', '.join(p.name for p in found)})",
+            file=source, hint="keep one per clip folder",
+        )  # fmt: skip
+    return found[0] if found else None

@@ -37,6 +37,7 @@ from retarget.testing.fakes import (
     TinyCharacter,
     fake_context,
     fake_library,
+    kinematic_env,
     tiny_world,
 )
 from retarget.testing.guard import NoPerEnvLoops
@@ -422,7 +423,28 @@ def check_scene_placement(plugin: object) -> None:
 # ---------------------------------------------------------------- algorithms
 
 
+def _estimates(env, algo) -> torch.Tensor:
+    """A kinematic algorithm's estimate of every library frame, flattened (root + joints)."""
+    from retarget.eval.kinematic import estimate_library
+
+    est = estimate_library(env, algo.pose_estimator())
+    parts = [np.concatenate([c.root_pos, c.local_rot.reshape(c.num_frames, -1)], -1)
+             for c in est.clips]  # fmt: skip
+    return torch.from_numpy(np.concatenate([*parts], 0))
+
+
 def check_algorithm_update(plugin: object) -> None:
+    if plugin_class(plugin).kinematic:
+        env = kinematic_env()
+        algo = make(plugin)
+        algo.setup(env, torch.Generator().manual_seed(0))
+        stats = algo.train_iteration(env)
+        bad = {k: v for k, v in stats.items() if not math.isfinite(float(v))}
+        assert stats and not bad, f"train_iteration statistics missing or non-finite: {stats}"
+        assert algo.pose_estimator() is not None, "a kinematic algorithm gives pose_estimator()"
+        est = _estimates(env, algo)
+        assert torch.isfinite(est).all(), "the pose estimate is not finite"
+        return
     env = FakeVecEnv(num_envs=4)
     algo = make(plugin)
     algo.setup(env, torch.Generator().manual_seed(0))
@@ -437,7 +459,8 @@ def check_algorithm_update(plugin: object) -> None:
 
 
 def check_algorithm_checkpoint(plugin: object) -> None:
-    env = FakeVecEnv(num_envs=4, seed=1)
+    kinematic = plugin_class(plugin).kinematic
+    env = kinematic_env() if kinematic else FakeVecEnv(num_envs=4, seed=1)
     algo = make(plugin)
     algo.setup(env, torch.Generator().manual_seed(0))
     algo.train_iteration(env)
@@ -454,6 +477,11 @@ def check_algorithm_checkpoint(plugin: object) -> None:
             f"state_dict() holds something a safe checkpoint load refuses: {exc}"
         ) from None
     other.load_state_dict(state)
+    if kinematic:
+        assert torch.equal(_estimates(env, algo), _estimates(env, other)), (
+            "a restored checkpoint estimates differently"
+        )
+        return
     obs = env.reset()
     assert torch.equal(algo.act(obs), other.act(obs)), "a restored checkpoint acts differently"
 

@@ -285,3 +285,21 @@ class FakeVecEnv:
         self._t[truncated] = 0
         self._obs = self._draw()
         return self._obs, reward.float(), terminated, truncated, {}
+
+
+def kinematic_env():
+    """A real one-environment human env with a three-point sensor (4-frame window) over two
+    seconds of generated walking: what kinematic algorithms (pose estimators) are checked on."""
+    from retarget.env import RetargetEnv
+    from retarget.env.options import EnvOptions
+    from retarget.motion.procedural import default_motions
+    from retarget.registry.loader import load_plugins
+
+    registry = load_plugins()
+    human = registry.get("character", "human").cls()
+    sensor_cls = registry.get("sensor", "three_point").cls
+    sensor = sensor_cls(sensor_cls.Config.model_validate({"past": 3}))
+    walk = default_motions(names=("walk",))[0]
+    walk = walk.with_(root_pos=walk.root_pos[:60], local_rot=walk.local_rot[:60],
+                      contacts=walk.contacts[:60])  # fmt: skip
+    return RetargetEnv(human, [walk], sensors=[sensor], options=EnvOptions(num_envs=1))

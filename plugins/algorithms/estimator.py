@@ -61,6 +61,13 @@ class Estimator(Algorithm):
 
     name = "estimator"
     Config = EstimatorConfig
+    kinematic = True
+
+    @classmethod
+    def example(cls) -> Estimator:
+        """Small enough for the contract suite's few updates."""
+        return cls(EstimatorConfig(window=4, hidden=[32], batch_size=64,
+                                   updates_per_iteration=1))  # fmt: skip
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         super().__init__(config)

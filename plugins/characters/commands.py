@@ -39,12 +39,22 @@ def _character(name: str, config: dict[str, Any]) -> Any:
         raise RetargetError(f"bad --set for character '{name}': {exc}") from None
 
 
-def _read_clip(path: Path) -> Any:
+def _read_clip(path: Path, joints: str | None = None, fps: float | None = None) -> Any:
+    """The clip at ``path``, read by the format its suffix (and content) says; ``joints`` and
+    ``fps`` configure the position-only format for a capture that needs them."""
+    from retarget.motion.sources import reader_for
+
     registry = retarget.load_plugins()
-    for entry in registry.entries["motion_format"].values():
-        if path.suffix.lower() in getattr(entry.cls, "suffixes", ()):
-            return entry.cls().read(path)
-    raise RetargetError(f"no motion format reads {path.suffix!r} files", file=path)
+    formats = {}
+    for name in registry.names("motion_format"):
+        cls = registry.get("motion_format", name).cls
+        settings = {"joints": joints, "fps": fps} if name == "positions" else {}
+        try:
+            config = cls.Config.model_validate({k: v for k, v in settings.items() if v})
+        except ValueError as exc:
+            raise RetargetError(f"--joints/--source-fps: {exc}") from None
+        formats[name] = cls(config)
+    return reader_for(path, formats).read(path)
 
 
 class CharacterCommand(Command):
@@ -63,7 +73,9 @@ class CharacterCommand(Command):
         show.add_argument("--size", type=image_size, default="960x720",
                           help="WIDTHxHEIGHT in pixels")
         ret = sub.add_parser("retarget", help="render a clip beside its kinematic retarget")
-        ret.add_argument("clip", type=Path, help="motion file (.bvh)")
+        ret.add_argument("clip", type=Path, help="motion file (.bvh, .npz, .npy)")
+        ret.add_argument("--joints", help="position-only files: joint names, one per line")
+        ret.add_argument("--source-fps", type=float, help="position-only files: their rate")
         ret.add_argument("--character", required=True, help="character plugin name")
         ret.add_argument("--out", type=Path, required=True, help="output (.gif, .mp4 or .png)")
         ret.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -82,7 +94,8 @@ class CharacterCommand(Command):
         if args.character_command == "show":
             show(character, args.out, width, height)
         else:
-            info = retarget_video(character, _read_clip(args.clip), args.out, width, height,
+            clip = _read_clip(args.clip, args.joints, args.source_fps)
+            info = retarget_video(character, clip, args.out, width, height,
                                   seconds=args.seconds, start=args.start, fps=args.fps)
             print(f"{character.name}: root scale {info['root_scale']:.3f}, joint-limit "
                   f"clipping {100 * info['clip_rate']:.2f}% of mapped angles")

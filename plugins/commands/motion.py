@@ -32,9 +32,7 @@ def _formats(args: argparse.Namespace) -> dict:
     if chosen is None and (joints is not None or fps is not None):
         chosen = "positions"
     if chosen is not None:
-        from retarget.registry.loader import load_plugins
-
-        entry = (registry or load_plugins()).get("motion_format", chosen)
+        entry = (registry or retarget.load_plugins()).get("motion_format", chosen)
         settings = {k: v for k, v in (("joints", joints), ("fps", fps)) if v is not None}
         try:
             config = entry.cls.Config.model_validate(settings)
@@ -254,10 +252,12 @@ class MotionCommand(Command):
                 f"cameras, of {last - first + 1} frames)"
             )
             return 0
+        boxes = _scene_boxes(clip)
         if suffix == ".png":
             count = max(1, min(args.frames, last - first + 1))
             frames = np.linspace(first, last, count).round().astype(int)
-            images = render_frames(clip, frames, width=args.size, height=args.size, view=args.view)
+            images = render_frames(clip, frames, width=args.size, height=args.size,
+                                   view=args.view, boxes=boxes)  # fmt: skip
             write_png(out, contact_sheet(images, columns=min(4, count)))
             what = f"{count}-frame sheet of {last - first + 1} frames"
         else:
@@ -265,7 +265,8 @@ class MotionCommand(Command):
 
             step = max(1, round(clip.fps / 30.0))
             frames = np.arange(first, last + 1, step)
-            images = render_frames(clip, frames, width=args.size, height=args.size, view=args.view)
+            images = render_frames(clip, frames, width=args.size, height=args.size,
+                                   view=args.view, boxes=boxes)  # fmt: skip
             writer = imageio_ffmpeg.write_frames(
                 str(out), (args.size, args.size), fps=clip.fps / step
             )
@@ -274,13 +275,23 @@ class MotionCommand(Command):
                 writer.send(np.ascontiguousarray(img))
             writer.close()
             what = f"{len(images)} frames at {clip.fps / step:.0f} fps"
-        print(f"wrote {out} ({what})")
+        print(f"wrote {out} ({what}{f', {len(boxes)} scene boxes' if boxes else ''})")
         return 0
 
 
 @retarget.hookimpl
 def register_commands(register) -> None:
     register(MotionCommand)
+
+
+def _scene_boxes(clip) -> list:
+    """The boxes of the scene recorded with a clip (a mesh beside its file), if any."""
+    if clip.source is None or not clip.source.parent.is_dir():
+        return []
+    from retarget.scene.mesh_boxes import boxes_from_mesh, mesh_beside
+
+    mesh = mesh_beside(clip.source)
+    return boxes_from_mesh(mesh) if mesh is not None else []
 
 
 def _camera_views(clip, picks, rig_name: str, size: int):

@@ -64,6 +64,11 @@ class MotionPropsConfig(PluginConfig):
     per_clip: bool = Field(
         False, description="an episode sees only its clip's props (others parked far away)"
     )
+    snap_tops: float = Field(
+        0.05, ge=0, le=0.2,
+        description="a mesh box whose top is within this many metres of where the clip's feet "
+        "rest on it is moved to meet them (a capture and its scan disagree by centimetres)",
+    )  # fmt: skip
     density: float = Field(500.0, gt=0, description="kg/m^3 of every part (uniform density)")
     randomize: Randomization = Field(default_factory=Randomization)
 
@@ -93,20 +98,8 @@ def _spec(p: FittedProp) -> PropSpec:
     return PropSpec(kind=p.kind, position=p.position, yaw=p.yaw, height=p.height, size=p.size)
 
 
-MESH_SUFFIXES = (".obj", ".ply", ".glb")
 PARK = (-50.0, -50.0)
 """Where props of other clips stand during an episode (``per_clip``): far from any motion."""
-
-
-def mesh_beside(source: Path) -> Path | None:
-    """The one scene mesh in a clip file's folder, if there is exactly one."""
-    found = sorted(p for p in source.parent.iterdir() if p.suffix.lower() in MESH_SUFFIXES)
-    if len(found) > 1:
-        raise PluginError(
-            f"several scene meshes beside the clip ({', '.join(p.name for p in found)})",
-            file=source, plugin="scene motion_props", hint="keep one per clip folder",
-        )  # fmt: skip
-    return found[0] if found else None
 
 
 def mesh_specs(path: Path) -> tuple[PropSpec, ...]:
@@ -114,6 +107,37 @@ def mesh_specs(path: Path) -> tuple[PropSpec, ...]:
 
     return tuple(PropSpec(kind="box", position=b.position, yaw=b.yaw, height=b.height,
                           size=b.size) for b in boxes_from_mesh(path))  # fmt: skip
+
+
+def scale_of(clip: MotionClip) -> float:
+    return float(clip.meta.get("scale", 1.0))  # type: ignore[arg-type]
+
+
+def _snapped(boxes: tuple[PropSpec, ...], clip: MotionClip, tolerance: float):
+    """Mesh boxes (in the clip's own frame) with their tops moved to where the clip's feet
+    rest on them, when that is within ``tolerance``."""
+    if tolerance <= 0:
+        return boxes
+    import math
+
+    from retarget.motion.scene_fit import fit_boxes
+
+    k = scale_of(clip)
+    rests = [r for r in fit_boxes(clip)]  # the clip is at the character's scale: divide by k
+    out = []
+    for b in boxes:
+        c, s_ = math.cos(b.yaw), math.sin(b.yaw)
+        tops = []
+        for r in rests:
+            dx, dy = r.position[0] / k - b.position[0], r.position[1] / k - b.position[1]
+            u, v = c * dx + s_ * dy, -s_ * dx + c * dy
+            if abs(u) <= b.size[0] / 2 and abs(v) <= b.size[1] / 2:
+                tops.append(r.height / k)
+        near = [t for t in tops if abs(t - b.height) <= tolerance]
+        if near:
+            b = b.model_copy(update={"height": float(sorted(near)[len(near) // 2])})
+        out.append(b)
+    return tuple(out)
 
 
 def _scaled(p: PropSpec, k: float) -> PropSpec:
@@ -153,6 +177,8 @@ class MotionProps(PropScene):
         for c, clip in enumerate(clips):
             mesh = None
             if cfg.meshes and clip.source is not None and clip.source.parent.is_dir():
+                from retarget.scene.mesh_boxes import mesh_beside
+
                 mesh = mesh_beside(clip.source)
             fitted = False
             if clip.name in cfg.clips:
@@ -160,12 +186,12 @@ class MotionProps(PropScene):
             elif cfg.sidecar and clip.source is not None and sidecar_path(clip.source).exists():
                 found = read_sidecar(sidecar_path(clip.source))
             elif mesh is not None:
-                found = mesh_specs(mesh)
+                found = _snapped(mesh_specs(mesh), clip, cfg.snap_tops / scale_of(clip))
             elif cfg.auto:
                 found, fitted = tuple(_spec(p) for p in fit_props(clip)), True
             else:
                 found = ()
-            scale = float(clip.meta.get("scale", 1.0))  # type: ignore[arg-type]
+            scale = scale_of(clip)
             if scale != 1.0 and not fitted:  # given in the clip's frame: to the character's
                 found = tuple(_scaled(s, scale) for s in found)
             for spec in found:
