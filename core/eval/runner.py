@@ -76,7 +76,8 @@ def evaluate(
     probe = MetricProbe(env.layout)
     has_joints = probe.joints is not None
     every = [
-        *standard_terms(env, has_joints=has_joints, head_distance=cfg.head_distance, fall=fall),
+        *standard_terms(env, has_joints=has_joints, head_distance=cfg.head_distance, fall=fall,
+                        stepped=kinematic is None),
         *terms,
     ]
     clips, frames = _starts(env, cfg.every)

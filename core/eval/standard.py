@@ -185,9 +185,12 @@ JOINT_MEANS = {"g_mpjpe", "mpjpe", "pa_mpjpe", "mpjre", "mpjve"}
 
 
 def standard_terms(
-    env, *, has_joints: bool, head_distance: float, fall: Termination | None
-) -> list[MetricTerm]:
-    """The report's terms, in the order its columns are printed."""
+    env, *, has_joints: bool, head_distance: float, fall: Termination | None,
+    stepped: bool = True,
+) -> list[MetricTerm]:  # fmt: skip
+    """The report's terms, in the order its columns are printed. ``stepped=False`` (a
+    kinematic method: nothing is simulated) leaves out the terms that read the simulation's
+    contact list (feet hitting props)."""
     means = [
         ("hmd_pos", "headset_cm", CM),
         ("hmd_rot", "headset_deg", DEG),
@@ -219,6 +222,6 @@ def standard_terms(
         Falls(fall),
     ]
     props = prop_geoms(env.world.model)
-    if props.any():
+    if props.any() and stepped:
         terms.append(PropHits(env, props))
     return terms

@@ -165,8 +165,24 @@ def sensor_inputs(
     ctx = StepContext(layout=env.layout, sim=sim, ref=ref, action=zeros, prev_action=zeros,
                       episode_step=torch.zeros(b, dtype=torch.long), dt=1.0 / lib.fps)  # fmt: skip
     sensors: list[Sensor] = list(env.sensors)
-    inputs = torch.cat([s.observe(ctx).reshape(b, -1).float() for s in sensors], dim=-1)
-    return inputs, frame_of
+    parts = [s.observe(ctx).reshape(b, -1).float() for s in sensors]
+    if env.observers:  # the scene around the user, each sample with its own clip's props
+        ctx = replace(ctx, scene=_scene_for(env.scene, clip, frame, lib.fps))
+        parts += [o.observe(ctx).reshape(b, -1).float() for o in env.observers]
+    return torch.cat(parts, dim=-1), frame_of
+
+
+def _scene_for(scene, clip: torch.Tensor, frame: torch.Tensor, fps: float):
+    """The env's scene holding one placement per sample: where each sample's clip puts its
+    props (per-clip props, boxes on a path), with the scene's usual noise from a fixed seed.
+    The estimator never steps the env, so its scene's placement state is free to use."""
+    if scene is None:
+        return None
+    ids = torch.arange(clip.shape[0])
+    scene.allocate(int(clip.shape[0]))
+    scene.start_episodes(ids, clip, frame.double() / fps)
+    scene.randomize(ids, torch.Generator().manual_seed(0))
+    return scene
 
 
 def pose_targets(

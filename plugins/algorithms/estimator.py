@@ -1,6 +1,7 @@
 """A kinematic pose estimator as an algorithm plugin (EnvPoser stage I): no physics, no actions.
 
-``retarget train --algorithm estimator --sensors three_point`` (or ``hmd``) trains, on the run's
+``retarget train --algorithm estimator --sensors three_point`` (or ``hmd``; with ``observers``
+such as ``height_map`` it also reads the scene around the user) trains, on the run's
 motion library with synthesised devices, a network from a window of device features to the
 whole canonical body with per-joint uncertainty and foot contacts
 (:mod:`retarget.learn.estimator`). Before the run starts, :meth:`Estimator.prepare_recipe`
@@ -113,11 +114,15 @@ class Estimator(Algorithm):
                 )  # fmt: skip
         cfg = self.config
         assert isinstance(cfg, EstimatorConfig)
+        # with observers the scene is read as it is: a mirrored or resized person would no
+        # longer match it, so those augmentations are off
+        scene_aware = bool(list(getattr(env, "observers", ())))
         settings = EstimatorSettings(
             hidden=tuple(cfg.hidden), lr=cfg.learning_rate, batch_size=cfg.batch_size,
-            updates_per_iteration=cfg.updates_per_iteration, mirror=cfg.mirror,
+            updates_per_iteration=cfg.updates_per_iteration,
+            mirror=cfg.mirror and not scene_aware,
             rot_weight=cfg.rot_weight, contact_weight=cfg.contact_weight,
-            scale_range=cfg.scale_range, input_noise=cfg.input_noise,
+            scale_range=0.0 if scene_aware else cfg.scale_range, input_noise=cfg.input_noise,
             weight_decay=cfg.weight_decay, lost_controllers=cfg.lost_controllers,
         )  # fmt: skip
         self.learner = EstimatorLearner(env, settings, generator or torch.Generator())
@@ -151,7 +156,8 @@ class Estimator(Algorithm):
             "y left, z up; heights are world heights); device features as the sensors "
             "compute them with the character root replaced by that frame",
             "observation_sources": [
-                {"name": s.name, "size": int(s.spec(layout).size)} for s in env.sensors
+                {"name": s.name, "size": int(s.spec(layout).size)}
+                for s in (*env.sensors, *env.observers)
             ],
             "control_hz": env.sim.settings.control_hz,
             "joints": list(sk.JOINT_NAMES),

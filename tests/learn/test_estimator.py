@@ -173,3 +173,20 @@ def test_lost_controllers_change_only_what_the_sensors_see(env) -> None:
     plain_frame = sensor_inputs(env, rows)[1]
     torch.testing.assert_close(pose_targets(env, rows, frame).positions,
                                pose_targets(env, rows, plain_frame).positions)  # fmt: skip
+
+
+def test_a_scene_aware_estimator_reads_the_height_map_of_each_samples_clip() -> None:
+    registry = load_plugins()
+    resolved = load(None, registry, shorthands={"sensors": "three_point"},
+                    assignments=["sensors.0.past=3", "observers=[height_map]",
+                                 "scene={type: boxes, preset: stepping_path}"])  # fmt: skip
+    env = env_from_recipe(resolved, num_envs=1, threads=1)
+    rows = torch.arange(0, env.library.num_frames, 7)
+    inputs, _ = sensor_inputs(env, rows)
+    heights = inputs[:, -120:]
+    assert inputs.shape[1] == env.sensors[0].spec(env.layout).size + 120
+    assert (heights.abs() > 0.05).any(), "some samples stand near a box"
+    learner = EstimatorLearner(env, EstimatorSettings(hidden=(32,), batch_size=64),
+                               torch.Generator().manual_seed(0))  # fmt: skip
+    stats = learner.train_iteration()
+    assert np.isfinite(stats["loss"])
