@@ -16,7 +16,16 @@ import warnings
 from collections.abc import Sequence
 
 import retarget
-from retarget.cli import eval_cmd, export_cmd, play_cmd, plugins_cmd, recipe_cmd, train_cmd
+from retarget.cli import (
+    eval_cmd,
+    export_cmd,
+    play_cmd,
+    plugins_cmd,
+    recipe_cmd,
+    serve_cmd,
+    stream_cmd,
+    train_cmd,
+)
 from retarget.errors import PluginError, RetargetError
 from retarget.kinds import Command
 from retarget.registry import Registry
@@ -69,6 +78,8 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     eval_cmd.add_parser(sub)
     play_cmd.add_parser(sub)
     export_cmd.add_parser(sub)
+    serve_cmd.add_parser(sub)
+    stream_cmd.add_parser(sub)
     for name in registry.names("command"):
         entry = registry.get("command", name)
         _add_plugin_command(sub, entry.cls, entry.plugin, entry.distribution)

@@ -80,15 +80,20 @@ def _driven_by(rec: DeviceRecording, path: str, registry: Registry, args: argpar
     changes = _changes(args)
     hz = locked_recipe(resolve_run(path), registry, **changes)[0].recipe.sim.control_hz
     stream = resample_stream(rec, hz)
-    seconds = len(stream) / hz + 1.0
+    # one standing frame before the first sample: a sensor's history before the recording
+    # starts is the standing pose (clamped reads at the clip start land on it), as live
+    lead = 1
+    seconds = (lead + len(stream)) / hz + 1.0
     loaded = load_run(path, registry, num_envs=1, clips=[idle_clip(seconds)], **changes)
     lib = loaded.env.library
-    rows = int(lib.start[0]) + torch.arange(len(stream))
-    start_hmd = lib.devices[int(lib.start[0]), 0].double().numpy()
+    first = int(lib.start[0]) + lead
+    rows = first + torch.arange(len(stream))
+    start_hmd = lib.devices[first, 0].double().numpy()
     lib.devices[rows] = torch.as_tensor(align_to(stream, start_hmd), dtype=lib.devices.dtype)
-    last = int(lib.start[0]) + len(stream) - 1
+    last = first + len(stream) - 1
     lib.devices[last + 1 : int(lib.start[0]) + int(lib.length[0])] = lib.devices[last]
     args.seconds = min(args.seconds, (len(stream) - 1) / hz)
+    args.start = args.start + lead / hz  # the rollout starts at the first sample
     _replay_recorded(loaded.env, rows, rec, rec.time[0] + np.arange(len(stream)) / hz, args.input)
     return loaded, f"recording {Path(args.input).name}"
 

@@ -282,6 +282,18 @@ class RetargetEnv:
         self.rewards.episode_sums.zero_()
         return self.observe(self._context(torch.zeros(self.num_envs, self.action_dim)))
 
+    def observe_now(self, groups: Sequence[str] | None = None) -> dict[str, torch.Tensor]:
+        """The observation (of ``groups``, default all) of the current simulation and
+        reference rows, recomputed: a live stream writes its newest device poses into the
+        library and acts on them at once."""
+        return self.observations.compute(self._context(self.prev_action), groups)
+
+    def rewind(self, frame: torch.Tensor) -> None:
+        """Move every environment's reference back to ``frame`` (the simulation is not
+        touched): a live stream keeps writing its devices into the same library rows instead
+        of running off the end of a clip."""
+        self.frame[:] = frame.to(self.frame.dtype)
+
     def reset(self) -> dict[str, torch.Tensor]:
         self._reset_envs(torch.arange(self.num_envs))
         return self.observe(self._context(torch.zeros(self.num_envs, self.action_dim)))

@@ -93,11 +93,16 @@ class ObservationManager:
         ``(C, H, W)``, so a network can give them a convolutional encoder."""
         return {g: [(s, self.sources[s].shape) for s in names] for g, names in self.groups.items()}
 
-    def compute(self, ctx: StepContext) -> dict[str, torch.Tensor]:
-        """Every group's ``(N, D)`` observation (non-finite values zeroed); each source once."""
+    def compute(
+        self, ctx: StepContext, groups: Sequence[str] | None = None
+    ) -> dict[str, torch.Tensor]:
+        """Every group's (or only ``groups``') ``(N, D)`` observation (non-finite values
+        zeroed); each source once."""
         cache: dict[str, torch.Tensor] = {}
         out = {}
         for group, names in self.groups.items():
+            if groups is not None and group not in groups:
+                continue
             parts = []
             for name in names:
                 if name not in cache:

@@ -93,6 +93,49 @@ def write_recording(path: str | Path, rec: DeviceRecording, convention: str = "r
     return path
 
 
+def parse_sample(
+    obj: dict, path: str | Path | None = None, line: int | None = None
+) -> tuple[float, np.ndarray, np.ndarray]:
+    """One sample ``{"t": .., "hmd": [7] | null, "left": .., "right": ..}`` as its time, poses
+    ``(3, 7)`` (as given, in the sample's convention; identity where untracked) and tracked
+    flags ``(3,)``; a malformed one raises :class:`MotionError` naming the file and line. The
+    recording reader and the live server (:mod:`retarget.live`) read samples through this."""
+    t = obj.get("t")
+    if isinstance(t, bool) or not isinstance(t, int | float) or not math.isfinite(t):
+        raise MotionError("sample needs a finite time 't' in seconds", file=path, line=line)
+    poses = np.zeros((len(DEVICES), 7))
+    poses[:, 3] = 1.0
+    tracked = np.zeros(len(DEVICES), dtype=bool)
+    for d, name in enumerate(DEVICES):
+        value = obj.get(name)
+        if value is None:
+            continue
+        if (
+            not isinstance(value, list)
+            or len(value) != 7
+            or not all(
+                isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+                for v in value
+            )
+        ):
+            raise MotionError(
+                f"'{name}' must be 7 finite numbers [x, y, z, qw, qx, qy, qz] or null",
+                file=path, line=line,
+            )  # fmt: skip
+        if max(abs(v) for v in value[:3]) > MAX_DISTANCE:
+            raise MotionError(
+                f"'{name}' is {max(abs(v) for v in value[:3]):.0f} m from the origin; devices "
+                f"are at most {MAX_DISTANCE:.0f} m away (units in metres?)",
+                file=path, line=line,
+            )  # fmt: skip
+        q = np.array(value[3:], dtype=np.float64)
+        if not 0.5 < np.linalg.norm(q) < 1.5:
+            raise MotionError(f"'{name}' quaternion is not unit length", file=path, line=line)
+        poses[d] = np.concatenate([value[:3], rot.normalize(q)])
+        tracked[d] = True
+    return float(t), poses, tracked
+
+
 def read_recording(path: str | Path) -> DeviceRecording:
     """Read a ``.jsonl`` device recording into the retarget convention (errors name the line),
     with its camera frames when ``NAME.frames.npz`` is beside it."""
@@ -136,10 +179,7 @@ def read_recording(path: str | Path) -> DeviceRecording:
     poses[..., 3] = 1.0
     tracked = np.zeros((count, 3), dtype=bool)
     for k, (number, line) in enumerate(lines[1:]):
-        obj = load(number, line)
-        t = obj.get("t")
-        if isinstance(t, bool) or not isinstance(t, int | float) or not math.isfinite(t):
-            raise MotionError("sample needs a finite time 't' in seconds", file=path, line=number)
+        t, pose, seen = parse_sample(load(number, line), path, number)
         if k and t <= time[k - 1]:
             raise MotionError(
                 f"time {t} is not after the previous sample's {time[k - 1]}", file=path, line=number
@@ -155,36 +195,9 @@ def read_recording(path: str | Path) -> DeviceRecording:
                 f"the recording is longer than {MAX_SECONDS / 3600:.0f} h", file=path, line=number
             )
         time[k] = t
-        for d, name in enumerate(DEVICES):
-            value = obj.get(name)
-            if value is None:
-                if k:
-                    poses[k, d] = poses[k - 1, d]
-                continue
-            if (
-                not isinstance(value, list)
-                or len(value) != 7
-                or not all(
-                    isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
-                    for v in value
-                )
-            ):
-                raise MotionError(
-                    f"'{name}' must be 7 finite numbers [x, y, z, qw, qx, qy, qz] or null",
-                    file=path,
-                    line=number,
-                )
-            if max(abs(v) for v in value[:3]) > MAX_DISTANCE:
-                raise MotionError(
-                    f"'{name}' is {max(abs(v) for v in value[:3]):.0f} m from the origin; devices "
-                    f"are at most {MAX_DISTANCE:.0f} m away (units in metres?)",
-                    file=path, line=number,
-                )  # fmt: skip
-            q = np.array(value[3:], dtype=np.float64)
-            if not 0.5 < np.linalg.norm(q) < 1.5:
-                raise MotionError(f"'{name}' quaternion is not unit length", file=path, line=number)
-            poses[k, d] = np.concatenate([value[:3], rot.normalize(q)])
-            tracked[k, d] = True
+        for d in range(len(DEVICES)):
+            poses[k, d] = pose[d] if seen[d] else (poses[k - 1, d] if k else poses[k, d])
+        tracked[k] = seen
     if not tracked.any():
         raise MotionError("no device is tracked in any sample (every pose is null)", file=path)
     poses = convert(poses, convention, "retarget")

@@ -1,0 +1,1 @@
+"""Live: a headset stream in, the simulated avatar out, over a WebSocket (``retarget serve``)."""

@@ -1,0 +1,112 @@
+"""One live avatar: device samples in, sensors -> policy -> physics, the body out.
+
+The run's environment is built for one environment over a standing idle clip just long enough
+for the sensors' window; the reference frame is pinned there (:meth:`RetargetEnv.rewind`) and
+each step writes the window of the newest device poses into those library rows, recomputes
+the observation (:meth:`RetargetEnv.observe_now`), acts and steps the physics. So a session
+runs for as long as the user streams, with no clip to run out of. Untracked devices hold
+their last pose, as a headset runtime reports them.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from retarget.errors import RetargetError
+from retarget.live.calibration import Calibration
+from retarget.motion.device_recording import convert
+
+
+@dataclass
+class Latest:
+    """The newest sample, already in the retarget convention (room frame)."""
+
+    t: float
+    poses: np.ndarray  # (3, 7)
+    tracked: np.ndarray  # (3,)
+    arrived: float  # perf_counter seconds
+
+
+class LiveSession:
+    """Steps a loaded run from device samples (``push``) one control step at a time."""
+
+    def __init__(self, loaded) -> None:
+        env = loaded.env
+        group = loaded.algorithm.policy()[0]
+        reads = {name for name, _ in env.obs_shapes.get(group, ())}
+        for sensor in (s for s in env.sensors if s.name in reads):
+            if sensor.needs().reference_offsets or sensor.name in ("full_body", "reference_action"):
+                raise RetargetError(
+                    f"the run's sensor '{sensor.name}' reads the reference body, which a live "
+                    "stream does not have", hint="serve a student (hmd, three_point sensors)",
+                )  # fmt: skip
+            if sensor.recorded is not None:
+                raise RetargetError(f"the run's sensor '{sensor.name}' reads recorded "
+                                    f"{sensor.recorded}, not sent live yet")  # fmt: skip
+        if env.num_envs != 1:
+            raise RetargetError("a live session drives one environment")
+        self.env, self.act, self.group = env, loaded.algorithm.act, group
+        lib = env.library
+        self.offsets = np.asarray(env.window_offsets)
+        if self.offsets.max() > 0:
+            raise RetargetError("the run's sensors read future device frames (future > 0), "
+                                "which a live stream cannot give")  # fmt: skip
+        self.frame0 = int(-self.offsets.min())  # the pinned reference frame
+        self.rows = lib.rows(torch.zeros(1, dtype=torch.long),
+                             torch.tensor([self.frame0]), tuple(env.window_offsets))[0]  # fmt: skip
+        start = lib.devices[self.rows[-1]].double().numpy()  # (3, 7) at the pinned frame
+        self.start_headset = start[0]
+        self.window = np.repeat(start[None], len(self.offsets), axis=0)  # world, oldest first
+        env.place(torch.zeros(1, dtype=torch.long), torch.tensor([self.frame0]))
+        self.held = start.copy()  # room frame after calibration; world before the first sample
+        self.calibration: Calibration | None = None
+        self.latest: Latest | None = None
+        self.used: Latest | None = None
+        self.steps = 0
+        self.bodies = tuple(env.layout.body_names)
+
+    def push(self, t: float, poses: np.ndarray, tracked: np.ndarray, convention: str) -> None:
+        """A new sample (the latest wins); poses in ``convention``, the client's room."""
+        here = convert(poses, convention, "retarget")
+        if self.calibration is None:
+            if not tracked[0]:
+                return  # calibrate on the first sample that has the headset
+            self.calibration = Calibration.between(here[0], self.start_headset)
+            self.held = here.copy()
+        self.held = np.where(tracked[:, None], here, self.held)
+        self.latest = Latest(t, self.held.copy(), tracked.copy(), time.perf_counter())
+
+    def step(self) -> dict:
+        """One control step with the newest sample; the body in the world frame."""
+        env, lib = self.env, self.env.library
+        self.used = self.latest
+        if self.latest is not None and self.calibration is not None:
+            current = self.calibration.to_world(self.latest.poses)
+        else:
+            current = self.window[-1]
+        self.window = np.concatenate([self.window[1:], current[None]], axis=0)
+        lib.devices[self.rows] = torch.as_tensor(self.window, dtype=lib.devices.dtype)
+        with torch.no_grad():
+            obs = env.observe_now([self.group])
+            env.step(self.act(obs))
+        env.rewind(torch.tensor([self.frame0]))
+        self.steps += 1
+        s = env.sim.state
+        return {
+            "root": s.qpos[0, :7].double().numpy(),
+            "body_pos": s.body_pos[0].double().numpy(),
+            "body_quat": s.body_quat[0].double().numpy(),
+        }
+
+    def in_room(self, pose: dict, convention: str) -> dict:
+        """A step's body moved back into the user's room, in ``convention``."""
+        poses = np.concatenate([pose["body_pos"], pose["body_quat"]], axis=-1)
+        root = pose["root"][None]
+        if self.calibration is not None:
+            poses, root = self.calibration.to_room(poses), self.calibration.to_room(root)
+        poses, root = convert(poses, "retarget", convention), convert(root, "retarget", convention)
+        return {"root": root[0], "body_pos": poses[:, :3], "body_quat": poses[:, 3:]}
