@@ -78,11 +78,13 @@ def _driven_by(rec: DeviceRecording, path: str, registry: Registry, args: argpar
     from retarget.train.load import load_run, locked_recipe
 
     changes = _changes(args)
-    hz = locked_recipe(resolve_run(path), registry, **changes)[0].recipe.sim.control_hz
+    resolved = locked_recipe(resolve_run(path), registry, **changes)[0]
+    hz = resolved.recipe.sim.control_hz
     stream = resample_stream(rec, hz)
-    # one standing frame before the first sample: a sensor's history before the recording
-    # starts is the standing pose (clamped reads at the clip start land on it), as live
-    lead = 1
+    # the sensors' history before the first sample is the standing body, as in a live
+    # session (retarget serve), which starts at the same frame of the same idle clip
+    pasts = [c.instantiate().frames_needed()[0] for c in resolved.of_kind("sensor")]
+    lead = max([1, *pasts])
     seconds = (lead + len(stream)) / hz + 1.0
     loaded = load_run(path, registry, num_envs=1, clips=[idle_clip(seconds)], **changes)
     lib = loaded.env.library

@@ -19,6 +19,7 @@ import torch
 from retarget.errors import RetargetError
 from retarget.live.calibration import Calibration
 from retarget.motion.device_recording import convert
+from retarget.motion.device_stream import align_to
 
 
 @dataclass
@@ -60,10 +61,14 @@ class LiveSession:
                              torch.tensor([self.frame0]), tuple(env.window_offsets))[0]  # fmt: skip
         start = lib.devices[self.rows[-1]].double().numpy()  # (3, 7) at the pinned frame
         self.start_headset = start[0]
-        self.window = np.repeat(start[None], len(self.offsets), axis=0)  # world, oldest first
+        # standing history, one frame behind: each step shifts it and appends the newest
+        before = lib.rows(torch.zeros(1, dtype=torch.long), torch.tensor([self.frame0 - 1]),
+                          tuple(env.window_offsets))[0]  # fmt: skip
+        self.window = lib.devices[before].double().numpy()  # world, oldest first
         env.place(torch.zeros(1, dtype=torch.long), torch.tensor([self.frame0]))
         self.held = start.copy()  # room frame after calibration; world before the first sample
         self.calibration: Calibration | None = None
+        self.first: np.ndarray | None = None  # the first sample, where calibration starts
         self.latest: Latest | None = None
         self.used: Latest | None = None
         self.steps = 0
@@ -76,6 +81,7 @@ class LiveSession:
             if not tracked[0]:
                 return  # calibrate on the first sample that has the headset
             self.calibration = Calibration.between(here[0], self.start_headset)
+            self.first = here.copy()
             self.held = here.copy()
         self.held = np.where(tracked[:, None], here, self.held)
         self.latest = Latest(t, self.held.copy(), tracked.copy(), time.perf_counter())
@@ -84,8 +90,9 @@ class LiveSession:
         """One control step with the newest sample; the body in the world frame."""
         env, lib = self.env, self.env.library
         self.used = self.latest
-        if self.latest is not None and self.calibration is not None:
-            current = self.calibration.to_world(self.latest.poses)
+        if self.latest is not None and self.first is not None:
+            # the same calibration as a recording's (align_to), so live equals play --input
+            current = align_to(np.stack([self.first, self.latest.poses]), self.start_headset)[1]
         else:
             current = self.window[-1]
         self.window = np.concatenate([self.window[1:], current[None]], axis=0)
