@@ -153,7 +153,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         env = loaded.env
         if not 0 <= args.clip < env.library.num_clips:
             raise RetargetError(f"--clip {args.clip}: the motions hold {env.library.num_clips}")
-        start = int(args.start * env.sim.settings.control_hz)
+        start = round(args.start * env.sim.settings.control_hz)
         group = loaded.algorithm.policy()[0] if args.cameras else "actor"
         images = image_inputs(env, group) if args.cameras else ()
         if args.cameras and not images:

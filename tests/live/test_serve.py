@@ -16,8 +16,8 @@ from helpers import REPO, TINY
 
 pytest.importorskip("websockets")
 
-from retarget.cli.main import build_parser, main  # noqa: E402
-from retarget.registry.loader import load_plugins  # noqa: E402
+from retarget.cli.main import build_parser, main
+from retarget.registry.loader import load_plugins
 
 RECORDING = REPO / "examples" / "recordings" / "walk_openxr.jsonl"
 
@@ -145,7 +145,7 @@ def test_the_session_follows_a_recording_as_play_input_does(run) -> None:
                                               "--out", "x.png", "--seconds", "2"])  # fmt: skip
     offline, _ = _driven_by(rec, str(run), registry, args)
     env = offline.env
-    start = int(round(args.start * env.sim.settings.control_hz))
+    start = round(args.start * env.sim.settings.control_hz)
     obs = env.place(torch.zeros(1, dtype=torch.long), torch.tensor([start]))
     want = []
     with torch.no_grad():
