@@ -25,6 +25,7 @@ from retarget.cli import (
     serve_cmd,
     stream_cmd,
     train_cmd,
+    view_cmd,
 )
 from retarget.errors import PluginError, RetargetError
 from retarget.kinds import Command
@@ -80,6 +81,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     export_cmd.add_parser(sub)
     serve_cmd.add_parser(sub)
     stream_cmd.add_parser(sub)
+    view_cmd.add_parser(sub)
     for name in registry.names("command"):
         entry = registry.get("command", name)
         _add_plugin_command(sub, entry.cls, entry.plugin, entry.distribution)
