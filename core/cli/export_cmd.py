@@ -18,6 +18,33 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
 
 
+def _export_stages(env, folder: Path) -> list[dict]:
+    """ONNX files of the networks the run's sensors run (a two-stage tracker's estimator):
+    a headset application runs each on its inputs and feeds its output to the policy's
+    columns of that source."""
+    import warnings
+
+    import torch
+
+    out = []
+    for sensor in env.sensors:
+        found = sensor.deployable()
+        if found is None:
+            continue
+        module, width, description = found
+        folder.mkdir(parents=True, exist_ok=True)
+        target = folder / f"{sensor.name}.onnx"
+        with torch.no_grad(), warnings.catch_warnings():  # the legacy exporter warns so
+            warnings.simplefilter("ignore")
+            torch.onnx.export(module, (torch.zeros(1, width),), str(target), input_names=["obs"],
+                              output_names=["out"], dynamic_axes={"obs": {0: "batch"},
+                                                                  "out": {0: "batch"}},
+                              opset_version=17, dynamo=False)  # fmt: skip
+        out.append({"source": sensor.name, "onnx": target.name, "obs_dim": width,
+                    "out_dim": int(sensor.spec(env.layout).size), **description})  # fmt: skip
+    return out
+
+
 def run(args: argparse.Namespace, registry: Registry) -> int:
     from retarget.cli.console import out
     from retarget.deploy import export_onnx, policy_of
@@ -43,6 +70,9 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     }
     metadata = {"run": str(loaded.run), "checkpoint": str(loaded.checkpoint), **metadata}
     path = Path(args.out) if args.out else loaded.run / "export" / "policy.onnx"
+    stages = _export_stages(env, path.parent)
+    if stages:
+        metadata["stages"] = stages  # networks inside sensors, run before the policy
     exported = export_onnx(loaded.algorithm, path, metadata)
     out.print(
         f"wrote {exported.onnx} (obs {exported.obs_dim} -> action {exported.action_dim}) "

@@ -78,6 +78,12 @@ class Sensor(StepPlugin):
         """
         return (0, 0)
 
+    def deployable(self) -> tuple[torch.nn.Module, int, dict] | None:
+        """A sensor that runs a network (a pose estimator: a two-stage tracker's first stage)
+        gives ``(module, input width, description)`` here, so ``retarget export`` writes it
+        as its own ONNX file beside the policy's; ``None`` (most sensors): plain features."""
+        return None
+
     recorded: ClassVar[str | None] = None
     """The stream of a device recording this sensor reads on a real headset instead of what
     it derives from the reference (``"images"``: camera frames); ``None`` (most sensors): it

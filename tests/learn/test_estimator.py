@@ -190,3 +190,40 @@ def test_a_scene_aware_estimator_reads_the_height_map_of_each_samples_clip() -> 
                                torch.Generator().manual_seed(0))  # fmt: skip
     stats = learner.train_iteration()
     assert np.isfinite(stats["loss"])
+
+
+def test_the_estimate_as_a_sensor_composes_in_a_recipe(tmp_path: Path) -> None:
+    """`estimated_body` gives a policy the estimator run's output, exactly what the run's
+    deployed network gives for the same device window; a student trains and exports with it."""
+    from retarget.learn.columns import source_columns
+
+    recipe = tmp_path / "est.yaml"
+    recipe.write_text(ESTIMATOR)
+    assert main(["train", str(recipe), "--steps", "128", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    est_run = tmp_path / "est" / "latest"
+    student = tmp_path / "student.yaml"
+    student.write_text(TINY.replace("name: tiny", "name: two_stage").replace(
+        "sensors: [three_point]",
+        f"sensors: [three_point, {{type: estimated_body, estimator: {est_run}}}]"))  # fmt: skip
+    assert main(["train", str(student), "--steps", "32", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    registry = load_plugins()
+    loaded = load_run(tmp_path / "two_stage" / "latest", registry, num_envs=2)
+    env = loaded.env
+    frames = torch.tensor([5, 30])
+    obs = env.place(torch.zeros(2, dtype=torch.long), frames)["actor"]
+    got = obs[:, source_columns(env, "actor", "estimated_body")]
+    estimator = load_run(est_run, registry, num_envs=1)
+    rows = estimator.env.library.rows(torch.zeros(2, dtype=torch.long), frames)[:, 0]
+    inputs, _ = sensor_inputs(estimator.env, rows)
+    want = DeployedEstimator(estimator.algorithm.learner.net).eval()(inputs).detach()
+    torch.testing.assert_close(got, want, atol=1e-5, rtol=1e-5)
+    assert main(["export", str(tmp_path / "two_stage" / "latest"), "--onnx"]) == 0
+    folder = tmp_path / "two_stage" / "latest" / "export"
+    meta = json.loads((folder / "policy.json").read_text())
+    (stage,) = meta["stages"]
+    assert stage["source"] == "estimated_body" and stage["inputs"][0]["name"] == "three_point"
+    ort = pytest.importorskip("onnxruntime")
+    (first,) = ort.InferenceSession(str(folder / stage["onnx"])).run(None, {"obs": inputs.numpy()})
+    np.testing.assert_allclose(first, want.numpy(), atol=1e-5)

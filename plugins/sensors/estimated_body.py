@@ -1,0 +1,121 @@
+"""The pose estimator as a sensor: a two-stage tracker's first stage, composable in recipes.
+
+``sensors: [three_point, {type: estimated_body, estimator: runs/EST/latest}]`` gives a policy
+the output of a trained pose estimator run (:mod:`retarget.learn.estimator`) beside the raw
+devices: the estimated body in the headset frame (root, 6D rotations), the foot-contact
+probabilities and each joint's position uncertainty, computed every step from the same device
+window a headset has. A physics policy trained (or distilled) with it follows the estimated
+full body, as KinPoly-v does; the uncertainty is an input, so it can learn when to trust the
+estimate. The estimator's own sensors are rebuilt from its run and read the headset frame
+exactly as in its training (the character's root replaced by the headset's ground point).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import TYPE_CHECKING
+
+from pydantic import Field
+
+import retarget
+from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
+
+if TYPE_CHECKING:
+    import torch
+
+
+class EstimatedBodyConfig(PluginConfig):
+    estimator: str | None = Field(
+        None, description="a pose estimator run (runs/NAME/latest); None: an untrained "
+        "estimator over a 3-frame three-point window (tests and the contract suite)",
+    )  # fmt: skip
+
+
+class EstimatedBody(Sensor):
+    """A trained pose estimator's body, contacts and uncertainty from the device window."""
+
+    name = "estimated_body"
+    Config = EstimatedBodyConfig
+    requires = ("site:head", "site:left_hand", "site:right_hand")
+
+    def __init__(self, config: PluginConfig | None = None) -> None:
+        super().__init__(config)
+        self._net = None
+        self._inner: list[Sensor] = []
+
+    def bind(self, layout: Layout) -> None:
+        super().bind(layout)
+        self._layout = layout
+        import torch
+
+        from retarget.learn.estimator import DeployedEstimator, PoseNet
+
+        cfg = self.config
+        assert isinstance(cfg, EstimatedBodyConfig)
+        registry = retarget.load_plugins()
+        if cfg.estimator is None:
+            cls = registry.get("sensor", "three_point").cls
+            self._inner = [cls(cls.Config.model_validate({"past": 2}))]
+            self._inner[0].bind(layout)
+            size = sum(s.spec(layout).size for s in self._inner)
+            torch.manual_seed(0)
+            self._net = DeployedEstimator(PoseNet(size, (64,))).eval()
+            return
+        from retarget.motion.procedural import idle_clip
+        from retarget.train.load import load_run
+
+        loaded = load_run(cfg.estimator, registry, num_envs=1, clips=[idle_clip(2.0)])
+        estimator = loaded.algorithm.pose_estimator()
+        if estimator is None:
+            raise PluginError(f"{cfg.estimator} is not a pose estimator run", plugin=self.name)
+        if loaded.env.observers:
+            raise PluginError(f"{cfg.estimator} reads the scene (observers); as a sensor only "
+                              "device-only estimators are supported", plugin=self.name)  # fmt: skip
+        self._inner = list(loaded.env.sensors)
+        for sensor in self._inner:
+            sensor.bind(layout)
+        self._net = DeployedEstimator(estimator.net).eval()
+
+    def deployable(self):
+        if self._net is None:
+            raise PluginError("deployable() before bind(layout)", plugin=self.name)
+        width = int(self._net.net.norm.mean.shape[0])
+        return self._net, width, {
+            "frame": "headset (the current headset's ground point and heading)",
+            "inputs": [{"name": s.name, "size": int(s.spec(self._layout).size)}
+                       for s in self._inner],
+            "estimator": self.config.estimator,
+        }  # fmt: skip
+
+    def frames_needed(self) -> tuple[int, int]:
+        if not self._inner:
+            raise PluginError("frames_needed() before bind(layout)", plugin=self.name)
+        return (max(s.frames_needed()[0] for s in self._inner), 0)
+
+    def spec(self, layout: Layout) -> ObsSpec:
+        from retarget.learn.estimator import DEPLOYED_SIZE
+
+        return ObsSpec((DEPLOYED_SIZE,))
+
+    def observe(self, ctx: StepContext) -> torch.Tensor:
+        import torch
+
+        from retarget.learn.pose_samples import HeadsetFrame
+
+        if self._net is None:
+            raise PluginError("observe() before bind(layout)", plugin=self.name)
+        now = ctx.ref.devices[:, list(ctx.ref.window_offsets).index(0), 0]
+        frame = HeadsetFrame.of(now)
+        qpos = ctx.sim.qpos.clone()
+        qpos[:, :3], qpos[:, 3:7] = now[:, :3], frame.yaw
+        headset_ctx = replace(ctx, sim=replace(ctx.sim, qpos=qpos))
+        n = ctx.num_envs
+        inputs = torch.cat([s.observe(headset_ctx).reshape(n, -1).float() for s in self._inner],
+                           dim=-1)  # fmt: skip
+        with torch.no_grad():
+            return self._net(inputs)
+
+
+@retarget.hookimpl
+def register_sensors(register) -> None:
+    register(EstimatedBody)
