@@ -28,6 +28,12 @@ def test_example_recipe_trains(recipe: Path, tmp_path: Path) -> None:
         assert main(["train", str(teacher), "--steps", "64", "--runs-dir", str(tmp_path),
                      "--no-tensorboard"]) == 0  # fmt: skip
         extra = ["--set", f"algorithm.teacher={tmp_path / 'teacher' / 'latest'}"]
+    elif "type: estimator" in recipe.read_text():  # supervised: no rollouts, its own sizes
+        assert main(["recipe", "validate", str(recipe)]) == 0
+        assert main(["train", str(recipe), "--runs-dir", str(tmp_path), "--steps", "16",
+                     "--no-tensorboard", "--set", "algorithm.batch_size=16",
+                     "--set", "algorithm.hidden=[16]"]) == 0  # fmt: skip
+        return
     else:
         extra = ["--set", "algorithm.critic_hidden=[16]"]
     assert main(["recipe", "validate", str(recipe)]) == 0

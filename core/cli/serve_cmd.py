@@ -13,7 +13,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("run", help="run directory of a student (hmd / three_point sensors)")
     parser.add_argument("--host", default="127.0.0.1",
                         help="interface to listen on (default: this machine only)")  # fmt: skip
-    parser.add_argument("--port", type=count(1, 65535), default=8765)
+    parser.add_argument("--port", type=count(1, 65535), default=8765, help="TCP port")
     parser.add_argument("--seconds", type=amount(0.0, 1e7), default=None,
                         help="stop after this long (default: until Ctrl-C)")  # fmt: skip
     parser.set_defaults(handler=run)

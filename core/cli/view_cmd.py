@@ -20,7 +20,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--live", metavar="URL",
                         help="follow a `retarget serve` session (one RUN)")  # fmt: skip
     parser.add_argument("--host", default="127.0.0.1", help="interface (default: this machine)")
-    parser.add_argument("--port", type=count(1, 65535), default=8080)
+    parser.add_argument("--port", type=count(1, 65535), default=8080, help="HTTP port")
     parser.add_argument("--stop-after", type=amount(0.0, 1e7), default=None,
                         help="close after this many seconds (default: Ctrl-C)")  # fmt: skip
     parser.set_defaults(handler=run)
