@@ -27,6 +27,7 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import torch
 
 from retarget.cli.serve_cmd import build_server
@@ -111,12 +112,30 @@ def main() -> None:
     parser.add_argument("--recording",
                         default=str(REPO / "examples/recordings/walk_openxr.jsonl"))
     parser.add_argument("--viewers", type=int, default=4)
+    parser.add_argument("--rate", type=float, default=None,
+                        help="resample the recording to this many samples/s (a headset's "
+                        "rate; default: as recorded)")  # fmt: skip
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--soak-minutes", type=float, default=0.0)
     args = parser.parse_args()
     torch.set_num_threads(1)
+    recording = args.recording
+    if args.rate:
+        from retarget.motion.device_recording import (
+            DeviceRecording,
+            read_recording,
+            write_recording,
+        )
+        from retarget.motion.device_stream import resample_stream
+
+        poses = resample_stream(read_recording(recording), args.rate)
+        times = np.arange(len(poses)) / args.rate
+        recording = f"/tmp/live_latency_{os.getpid()}_{args.rate:g}hz.jsonl"
+        write_recording(recording, DeviceRecording(times, poses, np.ones(poses.shape[:2], bool)))
+    args.recording = recording
     server, url, stop = start(args.run)
-    print(f"{args.run}: {server.character}, {server.hz:.0f} Hz, {args.viewers} viewers")
+    print(f"{args.run}: {server.character}, {server.hz:.0f} Hz, {args.viewers} viewers, "
+          f"{Path(args.recording).name}")
     for k in range(args.repeat):
         steps0 = server.stats.steps
         cpu0, wall0 = time.process_time(), time.perf_counter()

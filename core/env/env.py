@@ -288,11 +288,21 @@ class RetargetEnv:
         library and acts on them at once."""
         return self.observations.compute(self._context(self.prev_action), groups)
 
-    def rewind(self, frame: torch.Tensor) -> None:
-        """Move every environment's reference back to ``frame`` (the simulation is not
-        touched): a live stream keeps writing its devices into the same library rows instead
-        of running off the end of a clip."""
-        self.frame[:] = frame.to(self.frame.dtype)
+    def step_physics(self, action: torch.Tensor) -> torch.Tensor:
+        """Advance the simulation one control step with ``action`` and nothing else: no
+        reference advance, terminations, rewards or observations (a live session computes
+        the observation it acts on itself, :meth:`observe_now`). Environments whose physics
+        went non-finite are put back at their current reference frame; returns which."""
+        action = torch.nan_to_num(torch.as_tensor(action, dtype=torch.float32), 0.0, 0.0, 0.0)
+        action = action.clamp(-1.0, 1.0)
+        bad = torch.from_numpy(self.sim.step(action))
+        self.total_steps += self.num_envs
+        self.episode_step += 1
+        self.prev_action = action.clone()
+        ids = bad.nonzero().flatten()
+        if ids.numel():
+            self._reset_envs(ids, self.clip[ids], self.frame[ids])
+        return bad
 
     def reset(self) -> dict[str, torch.Tensor]:
         self._reset_envs(torch.arange(self.num_envs))

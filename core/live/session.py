@@ -1,9 +1,10 @@
 """One live avatar: device samples in, sensors -> policy -> physics, the body out.
 
 The run's environment is built for one environment over a standing idle clip just long enough
-for the sensors' window; the reference frame is pinned there (:meth:`RetargetEnv.rewind`) and
-each step writes the window of the newest device poses into those library rows, recomputes
-the observation (:meth:`RetargetEnv.observe_now`), acts and steps the physics. So a session
+for the sensors' window; the reference frame stays there and each step writes the window of
+the newest device poses into those library rows, computes the policy's observation
+(:meth:`RetargetEnv.observe_now`), acts and steps only the physics
+(:meth:`RetargetEnv.step_physics`: no rewards or training reference). So a session
 runs for as long as the user streams, with no clip to run out of. Untracked devices hold
 their last pose, as a headset runtime reports them.
 """
@@ -99,8 +100,7 @@ class LiveSession:
         lib.devices[self.rows] = torch.as_tensor(self.window, dtype=lib.devices.dtype)
         with torch.no_grad():
             obs = env.observe_now([self.group])
-            env.step(self.act(obs))
-        env.rewind(torch.tensor([self.frame0]))
+            env.step_physics(self.act(obs))
         self.steps += 1
         s = env.sim.state
         return {
