@@ -250,16 +250,20 @@ class BatchedSim:
         data = self._scratch
         for i in range(self.num_envs):  # BatchedSim is where per-environment loops live
             self.batch.get_data(i, data)
-            n = data.ncon
-            if n == 0:
-                continue
-            con = data.contact
-            own = self._own_geom[np.asarray(con.geom[:n]).reshape(-1, 2)]
-            dist = np.asarray(con.dist[:n])
-            depth = -dist[(own[:, 0] != own[:, 1]) & (dist < 0)]
-            if depth.size:
-                deepest[i], mean[i] = depth.max(), depth.mean()
+            deepest[i], mean[i] = self._overlap(data)
         return deepest, mean
+
+    def _overlap(self, data: mujoco.MjData) -> tuple[float, float]:
+        """Deepest and mean overlap of the character's geoms into others in ``data``'s
+        contact list (0, 0 without any)."""
+        n = data.ncon
+        if n == 0:
+            return 0.0, 0.0
+        con = data.contact
+        own = self._own_geom[np.asarray(con.geom[:n]).reshape(-1, 2)]
+        dist = np.asarray(con.dist[:n])
+        depth = -dist[(own[:, 0] != own[:, 1]) & (dist < 0)]
+        return (float(depth.max()), float(depth.mean())) if depth.size else (0.0, 0.0)
 
     def pose_penetration(
         self, qpos: np.ndarray, mocap: tuple[np.ndarray, np.ndarray] | None = None
@@ -278,15 +282,7 @@ class BatchedSim:
         for i in range(len(qpos)):  # an evaluation metric, once per estimated frame
             data.qpos[:nq] = qpos[i]
             mujoco.mj_fwdPosition(self.model, data)
-            n = data.ncon
-            if n == 0:
-                continue
-            con = data.contact
-            own = self._own_geom[np.asarray(con.geom[:n]).reshape(-1, 2)]
-            dist = np.asarray(con.dist[:n])
-            depth = -dist[(own[:, 0] != own[:, 1]) & (dist < 0)]
-            if depth.size:
-                deepest[i], mean[i] = depth.max(), depth.mean()
+            deepest[i], mean[i] = self._overlap(data)
         return deepest, mean
 
     def each_env(self, fn: Callable[[mujoco.MjData], T]) -> list[T]:
