@@ -10,6 +10,7 @@ a Unity or OpenXR application reproduces: one JSON message per tracking frame.
 from __future__ import annotations
 
 import asyncio
+import base64
 import json
 import time
 from pathlib import Path
@@ -69,7 +70,10 @@ async def replay(path: str | Path, url: str, *, speed: float = 1.0, viewers: int
         watchers = [await _connect(url, wait) for _ in range(viewers)]
         tasks = [asyncio.create_task(watch(conn, "poses"))]
         tasks += [asyncio.create_task(watch(w, "viewer_poses")) for w in watchers]
-        await conn.send(json.dumps({"type": "hello", "role": "driver", "convention": convention}))
+        hello = {"type": "hello", "role": "driver", "convention": convention}
+        if rec.frames is not None:  # an image student's cameras, with the recording's rig
+            hello["rig"] = json.loads(rec.frames.rig)
+        await conn.send(json.dumps(hello))
         start = time.perf_counter()
         for k in range(len(rec.time)):
             due = start + (rec.time[k] - rec.time[0]) / speed
@@ -79,6 +83,12 @@ async def replay(path: str | Path, url: str, *, speed: float = 1.0, viewers: int
             sample: dict[str, object] = {"type": "devices", "t": float(rec.time[k])}
             for d, name in enumerate(DEVICES):
                 sample[name] = poses[k, d].tolist() if rec.tracked[k, d] else None
+            if rec.frames is not None:
+                frame = rec.frames.images[int(rec.frames.latest(rec.time[k : k + 1])[0])]
+                sample["images"] = {
+                    "shape": list(frame.shape),
+                    "data": base64.b64encode(frame.tobytes()).decode(),
+                }
             sent_at[float(rec.time[k])] = time.perf_counter()
             await conn.send(json.dumps(sample))
         await asyncio.sleep(linger)

@@ -24,6 +24,7 @@ import time
 from collections import Counter
 from dataclasses import dataclass, field
 
+from retarget.errors import PluginError
 from retarget.live.protocol import BadMessage, Hello, Sample, parse, pose_message
 from retarget.live.session import LiveSession
 
@@ -36,6 +37,7 @@ class Client:
     role: str = "viewer"
     convention: str = "retarget"
     last_t: float | None = None
+    rig: str | None = None
 
 
 @dataclass
@@ -85,7 +87,7 @@ class LiveServer:
                     self._bad(conn, type(exc).__name__, str(exc))
                     continue
                 if isinstance(msg, Hello):
-                    me.convention = msg.convention
+                    me.convention, me.rig = msg.convention, msg.rig
                     me.role = msg.role
                     if msg.role == "driver" and self.driver not in (None, conn):
                         me.role = "viewer"
@@ -129,7 +131,7 @@ class LiveServer:
             self._bad(conn, "order", f"out of order: t {msg.t} after {me.last_t}")
             return
         me.last_t = msg.t
-        self.session.push(msg.t, msg.poses, msg.tracked, me.convention)
+        self.session.push(msg.t, msg.poses, msg.tracked, me.convention, msg.images, me.rig)
         self.stats.samples += 1
         self._arrived.set()
 
@@ -149,8 +151,18 @@ class LiveServer:
             await asyncio.sleep(0)  # let receivers run between steps
 
     def _step(self) -> None:
+        from retarget.errors import RetargetError
+
         session = self.session
-        pose = session.step()
+        try:
+            pose = session.step()
+        except (RetargetError, PluginError) as exc:  # e.g. images of the wrong rig or size
+            self.stats.bad[str(exc).split(":")[0][:60]] += 1
+            for conn in list(self.clients):
+                asyncio.get_running_loop().create_task(
+                    _send(conn, json.dumps({"type": "error", "message": str(exc)})))
+            session.images = None
+            return
         used = session.used
         latency = None
         if used is not None:

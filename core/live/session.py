@@ -31,6 +31,7 @@ class Latest:
     poses: np.ndarray  # (3, 7)
     tracked: np.ndarray  # (3,)
     arrived: float  # perf_counter seconds
+    images: np.ndarray | None = None  # (C, H, W) uint8
 
 
 class LiveSession:
@@ -46,9 +47,12 @@ class LiveSession:
                     f"the run's sensor '{sensor.name}' reads the reference body, which a live "
                     "stream does not have", hint="serve a student (hmd, three_point sensors)",
                 )  # fmt: skip
-            if sensor.recorded is not None:
-                raise RetargetError(f"the run's sensor '{sensor.name}' reads recorded "
-                                    f"{sensor.recorded}, not sent live yet")  # fmt: skip
+            if sensor.recorded not in (None, "images"):
+                raise RetargetError(
+                    f"the run's sensor '{sensor.name}' reads a recorded {sensor.recorded!r} "
+                    "stream, which is not sent live"
+                )
+        self.image_sensors = [s for s in env.sensors if s.name in reads and s.recorded]
         if env.num_envs != 1:
             raise RetargetError("a live session drives one environment")
         self.env, self.act, self.group = env, loaded.algorithm.act, group
@@ -74,9 +78,15 @@ class LiveSession:
         self.used: Latest | None = None
         self.steps = 0
         self.bodies = tuple(env.layout.body_names)
+        self.images: np.ndarray | None = None  # the latest camera frames, held until new ones
+        self.rig: str | None = None
 
-    def push(self, t: float, poses: np.ndarray, tracked: np.ndarray, convention: str) -> None:
-        """A new sample (the latest wins); poses in ``convention``, the client's room."""
+    def push(self, t: float, poses: np.ndarray, tracked: np.ndarray, convention: str,
+             images: np.ndarray | None = None, rig: str | None = None) -> None:  # fmt: skip
+        """A new sample (the latest wins); poses in ``convention``, the client's room;
+        ``images`` ``(C, H, W)`` for an image student, from the cameras ``rig`` (JSON)."""
+        if images is not None:
+            self.images, self.rig = images, rig
         here = convert(poses, convention, "retarget")
         if self.calibration is None:
             if not tracked[0]:
@@ -85,7 +95,7 @@ class LiveSession:
             self.first = here.copy()
             self.held = here.copy()
         self.held = np.where(tracked[:, None], here, self.held)
-        self.latest = Latest(t, self.held.copy(), tracked.copy(), time.perf_counter())
+        self.latest = Latest(t, self.held.copy(), tracked.copy(), time.perf_counter(), images)
 
     def step(self) -> dict:
         """One control step with the newest sample; the body in the world frame."""
@@ -98,6 +108,8 @@ class LiveSession:
             current = self.window[-1]
         self.window = np.concatenate([self.window[1:], current[None]], axis=0)
         lib.devices[self.rows] = torch.as_tensor(self.window, dtype=lib.devices.dtype)
+        if self.image_sensors:
+            self._replay_images()
         with torch.no_grad():
             obs = env.observe_now([self.group])
             env.step_physics(self.act(obs))
@@ -108,6 +120,20 @@ class LiveSession:
             "body_pos": s.body_pos[0].double().numpy(),
             "body_quat": s.body_quat[0].double().numpy(),
         }
+
+    def _replay_images(self) -> None:
+        """The latest camera frames into the image sensors' row of the pinned frame (held
+        until newer ones arrive, like the devices)."""
+        from pathlib import Path
+
+        from retarget import RecordedStream
+
+        if self.images is None:
+            return  # until frames arrive the sensors show the standing body's rendered views
+        row = self.rows[-1:]
+        stream = RecordedStream(self.images[None], {"rig": self.rig or ""}, Path("live stream"))
+        for sensor in self.image_sensors:
+            sensor.replay(row, stream)
 
     def in_room(self, pose: dict, convention: str) -> dict:
         """A step's body moved back into the user's room, in ``convention``."""

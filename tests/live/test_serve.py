@@ -93,7 +93,9 @@ def test_bad_messages_are_counted_and_a_disconnect_frees_the_driver_seat(run) ->
             for bad in ("not json", "[1, 2]", json.dumps({"type": "dance"}),
                         json.dumps({**sample, "hmd": [0, 0, 1]}),
                         json.dumps({**sample, "hmd": [0, 0, 1e6, 1, 0, 0, 0]}),
-                        json.dumps({"type": "hello", "role": "boss"})):  # fmt: skip
+                        json.dumps({"type": "hello", "role": "boss"}),
+                        json.dumps({**sample, "t": 0.5, "images": {"shape": [2, 4, 4],
+                                                                    "data": "!!"}})):  # fmt: skip
                 await a.send(bad)
             await a.send(b"\x00binary")
             await a.send(json.dumps(sample))
@@ -111,7 +113,7 @@ def test_bad_messages_are_counted_and_a_disconnect_frees_the_driver_seat(run) ->
                     got["errors"].append(msg["message"])
                 elif msg["type"] == "pose":
                     got["poses"] += 1
-                if len(got["errors"]) >= 8 and got["poses"] >= 3:
+                if len(got["errors"]) >= 9 and got["poses"] >= 3:
                     break
         async with connect(url) as c:  # the seat is free again
             await c.send(json.dumps({"type": "hello", "role": "driver"}))
@@ -122,7 +124,7 @@ def test_bad_messages_are_counted_and_a_disconnect_frees_the_driver_seat(run) ->
     with Running(run) as live:
         got = asyncio.run(session(live.url))
         summary = live.server.stats.summary()
-    assert sum(summary["bad_messages"].values()) == 8, summary
+    assert sum(summary["bad_messages"].values()) == 9, summary
     assert got["poses"] >= 3, "the server kept stepping and answering"
     assert "another client drives" in got["second"]
     assert got["again"] == "driver"
@@ -161,3 +163,35 @@ def test_the_session_follows_a_recording_as_play_input_does(run) -> None:
         live.push(k / hz, stream[k], np.ones(3, dtype=bool), "retarget")
         got.append(live.step()["body_pos"])
     np.testing.assert_allclose(np.array(got), np.array(want), atol=1e-4)
+
+
+def test_an_image_student_is_served_with_the_headsets_camera_frames(tmp_path) -> None:
+    """A recording with frames streams to an image student: every step answered, no error."""
+    from retarget.live.replay import replay
+
+    teacher = tmp_path / "teacher.yaml"
+    from helpers import TINY_TEACHER
+
+    teacher.write_text(TINY_TEACHER)
+    assert main(["train", str(teacher), "--steps", "32", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    student = tmp_path / "student.yaml"
+    cams = "{type: ego_cameras, rig: aria, width: 24, height: 16}"
+    student.write_text(TINY.replace("name: tiny", "name: eyes")
+                       .replace("sensors: [three_point]", f"sensors: [hmd, {cams}]"))
+    assert main(["train", str(student), "--teacher", str(tmp_path / "teacher" / "latest"),
+                 "--steps", "32", "--runs-dir", str(tmp_path), "--no-tensorboard",
+                 "--set", "algorithm.minibatch_size=16", "--set", "sim.actuation=pd"]) == 0
+    assert main(["motion", "generate", "--out", str(tmp_path / "clips"), "--names", "walk"]) == 0
+    rec = tmp_path / "me.jsonl"
+    assert main(["motion", "record", str(tmp_path / "clips" / "walk.bvh"), "--out", str(rec),
+                 "--cameras", "aria", "--size", "24x16"]) == 0  # fmt: skip
+    with Running(tmp_path / "eyes" / "latest") as live:
+        stats = asyncio.run(replay(rec, live.url, speed=8.0))
+        summary = live.server.stats.summary()
+    assert stats["errors"] == 0 and summary["bad_messages"] == {}, (stats, summary)
+    assert stats["poses"] > 10
+    session = live.server.session
+    sensor = session.image_sensors[0]
+    seen = sensor._images[session.rows[-1]].numpy()
+    assert seen.shape == (2, 16, 24) and seen.any(), "the last frame sent is what it reads"
