@@ -17,6 +17,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.add_argument("--motions", help="clip a run is rolled out on (default: its first)")
     parser.add_argument("--seconds", type=amount(0.5, 600.0), default=10.0,
                         help="length of each run's rollout")  # fmt: skip
+    parser.add_argument("--joints", help="position-only clips: joint names, one per line")
+    parser.add_argument("--source-fps", type=float, help="position-only clips: their rate")
     parser.add_argument("--live", metavar="URL",
                         help="follow a `retarget serve` session (one RUN)")  # fmt: skip
     parser.add_argument("--host", default="127.0.0.1", help="interface (default: this machine)")
@@ -54,12 +56,10 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             loaded = load_run(resolve_run(target), registry, num_envs=1, motions=args.motions)
             tracks.append(run_track(target, loaded, args.seconds))
         else:
-            from retarget.motion.sources import default_formats, reader_for
+            from retarget.motion.sources import read_clip
 
-            path = Path(target)
-            if not path.is_file():
-                raise RetargetError("no such run directory or motion file", file=path)
-            tracks.append(clip_track(target, reader_for(path, default_formats()).read(path)))
+            clip = read_clip(target, joints=args.joints, fps=args.source_fps)
+            tracks.append(clip_track(target, clip))
     viewer = Viewer(tracks, args.host, args.port)
     out.print(f"viewer on http://{args.host}:{args.port} ({len(tracks)} tracks); Ctrl-C stops")
     with contextlib.suppress(KeyboardInterrupt):

@@ -105,3 +105,21 @@ def default_formats() -> dict[str, MotionFormat]:
         name: registry.get("motion_format", name).cls()  # type: ignore[misc]
         for name in registry.names("motion_format")
     }
+
+
+def read_clip(path: str | Path, *, joints: str | None = None, fps: float | None = None,
+              formats: Mapping[str, MotionFormat] | None = None) -> MotionClip:  # fmt: skip
+    """One motion file read by the format its suffix and content say; ``joints`` (a names
+    file) and ``fps`` configure the position-only format for a capture that needs them."""
+    path = Path(path)
+    if not path.is_file():
+        raise MotionError("no such motion file", file=path)
+    formats = dict(formats or default_formats())
+    if (joints or fps) and "positions" in formats:
+        cls = type(formats["positions"])
+        settings = {k: v for k, v in (("joints", joints), ("fps", fps)) if v}
+        try:
+            formats["positions"] = cls(cls.Config.model_validate(settings))
+        except ValueError as exc:
+            raise MotionError(f"--joints/--fps: {exc}", file=path) from None
+    return reader_for(path, formats).read(path)

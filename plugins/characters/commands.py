@@ -40,21 +40,9 @@ def _character(name: str, config: dict[str, Any]) -> Any:
 
 
 def _read_clip(path: Path, joints: str | None = None, fps: float | None = None) -> Any:
-    """The clip at ``path``, read by the format its suffix (and content) says; ``joints`` and
-    ``fps`` configure the position-only format for a capture that needs them."""
-    from retarget.motion.sources import reader_for
+    from retarget.motion.sources import read_clip
 
-    registry = retarget.load_plugins()
-    formats = {}
-    for name in registry.names("motion_format"):
-        cls = registry.get("motion_format", name).cls
-        settings = {"joints": joints, "fps": fps} if name == "positions" else {}
-        try:
-            config = cls.Config.model_validate({k: v for k, v in settings.items() if v})
-        except ValueError as exc:
-            raise RetargetError(f"--joints/--source-fps: {exc}") from None
-        formats[name] = cls(config)
-    return reader_for(path, formats).read(path)
+    return read_clip(path, joints=joints, fps=fps)
 
 
 class CharacterCommand(Command):
