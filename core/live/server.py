@@ -21,7 +21,7 @@ import asyncio
 import contextlib
 import json
 import time
-from collections import Counter
+from collections import Counter, deque
 from dataclasses import dataclass, field
 
 from retarget.errors import PluginError
@@ -46,13 +46,13 @@ class Stats:
     samples: int = 0
     bad: Counter = field(default_factory=Counter)
     skipped_poses: int = 0
-    latencies_ms: list[float] = field(default_factory=list)
+    latencies_ms: deque = field(default_factory=lambda: deque(maxlen=100_000))  # the latest
     connections: int = 0
 
     def summary(self) -> dict:
         import numpy as np
 
-        lat = np.asarray(self.latencies_ms[-100_000:])
+        lat = np.asarray(self.latencies_ms)
         return {
             "steps": self.steps, "samples": self.samples, "bad_messages": dict(self.bad),
             "skipped_poses": self.skipped_poses, "connections": self.connections,
