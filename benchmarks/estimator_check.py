@@ -16,13 +16,12 @@ Run: ``.venv/bin/python benchmarks/estimator_check.py RUN --motions DIR [--lost 
 from __future__ import annotations
 
 import argparse
-import statistics
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
 import torch
+from bench_realtime import per_call_ms  # the same timing as the real-time benchmark
 
 from retarget.learn.estimator import DeployedEstimator
 from retarget.learn.pose_samples import forward_kinematics, pose_targets, sensor_inputs
@@ -44,18 +43,6 @@ def errors(env, learner, rows: torch.Tensor) -> tuple[np.ndarray, np.ndarray]:
     pos = forward_kinematics(out.root_pos, out.matrices, target.heights)
     err = (pos - target.positions).norm(dim=-1).numpy()
     return err, torch.exp(0.5 * out.pos_logvar).numpy()
-
-
-def per_call_ms(fn, repeats: int = 2000) -> float:
-    for _ in range(100):
-        fn()
-    blocks = []
-    for _ in range(5):
-        t = time.perf_counter()
-        for _ in range(repeats):
-            fn()
-        blocks.append((time.perf_counter() - t) / repeats * 1e3)
-    return statistics.median(blocks)
 
 
 def main() -> None:
@@ -113,7 +100,7 @@ def main() -> None:
     net = DeployedEstimator(learner.net).eval()
     one, _ = sensor_inputs(env, rows[:1])
     with torch.inference_mode():
-        torch_ms = per_call_ms(lambda: net(one))
+        torch_ms = per_call_ms(lambda: net(one), 2000)
     line = f"speed, batch 1, one thread: torch {1e3 / torch_ms:,.0f} frames/s ({torch_ms:.3f} ms)"
     try:
         import onnxruntime as ort
@@ -127,7 +114,7 @@ def main() -> None:
             options.intra_op_num_threads = options.inter_op_num_threads = 1
             session = ort.InferenceSession(str(exported.onnx), options)
             feed = {"obs": one.numpy()}
-            onnx_ms = per_call_ms(lambda: session.run(None, feed))
+            onnx_ms = per_call_ms(lambda: session.run(None, feed), 2000)
         line += f"; onnxruntime {1e3 / onnx_ms:,.0f} frames/s ({onnx_ms:.3f} ms)"
     except ImportError:
         pass

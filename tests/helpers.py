@@ -65,3 +65,22 @@ def assert_state_equal(a: Any, b: Any, where: str = "state") -> None:
         assert (a == b).all(), where
     else:
         assert a == b, where
+
+
+def image_student(tmp_path: Path, steps: int) -> Path:
+    """A tiny headset + aria-camera (2 x 16 x 24) student distilled from a tiny teacher."""
+    teacher = tmp_path / "teacher.yaml"
+    teacher.write_text(TINY_TEACHER)
+    from retarget.cli.main import main
+
+    assert main(["train", str(teacher), "--steps", str(steps), "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    student = tmp_path / "student.yaml"
+    cams = "{type: ego_cameras, rig: aria, width: 24, height: 16}"
+    student.write_text(TINY.replace("name: tiny", "name: eyes")
+                       .replace("sensors: [three_point]", f"sensors: [hmd, {cams}]"))
+    assert main(["train", str(student), "--teacher", str(tmp_path / "teacher" / "latest"),
+                 "--steps", str(steps), "--runs-dir", str(tmp_path), "--no-tensorboard",
+                 "--set", "algorithm.minibatch_size=16",
+                 "--set", "sim.actuation=pd"]) == 0  # fmt: skip
+    return tmp_path / "eyes" / "latest"

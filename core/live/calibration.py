@@ -26,28 +26,24 @@ class Calibration:
         yaw = float(rot.yaw(start_headset[3:]) - rot.yaw(first_headset[3:]))
         return cls(yaw, np.asarray(first_headset[:2], float), np.asarray(start_headset[:2], float))
 
-    def _turn(self, sign: float) -> tuple[np.ndarray, np.ndarray]:
-        c, s = np.cos(sign * self.yaw), np.sin(sign * self.yaw)
-        m = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-        q = rot.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.array(sign * self.yaw))
-        return m, q
-
     def to_world(self, poses: np.ndarray) -> np.ndarray:
         """Room poses ``(..., 7)`` into the character's world."""
-        m, q = self._turn(1.0)
-        pos = poses[..., :3].copy()
-        pos[..., :2] -= self.origin
-        pos = pos @ m.T
-        pos[..., :2] += self.target
-        quat = rot.mul(np.broadcast_to(q, poses[..., 3:].shape), poses[..., 3:])
-        return np.concatenate([pos, rot.normalize(quat)], axis=-1)
+        return _move(poses, self.yaw, self.origin, self.target)
 
     def to_room(self, poses: np.ndarray) -> np.ndarray:
         """World poses ``(..., 7)`` back into the user's room."""
-        m, q = self._turn(-1.0)
-        pos = poses[..., :3].copy()
-        pos[..., :2] -= self.target
-        pos = pos @ m.T
-        pos[..., :2] += self.origin
-        quat = rot.mul(np.broadcast_to(q, poses[..., 3:].shape), poses[..., 3:])
-        return np.concatenate([pos, rot.normalize(quat)], axis=-1)
+        return _move(poses, -self.yaw, self.target, self.origin)
+
+
+def _move(poses: np.ndarray, yaw: float, origin: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """Turn poses ``(..., 7)`` by ``yaw`` about +Z around ``origin`` (xy) and put ``origin``
+    at ``target``."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    m = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    q = rot.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.array(yaw))
+    pos = poses[..., :3].copy()
+    pos[..., :2] -= origin
+    pos = pos @ m.T
+    pos[..., :2] += target
+    quat = rot.mul(np.broadcast_to(q, poses[..., 3:].shape), poses[..., 3:])
+    return np.concatenate([pos, rot.normalize(quat)], axis=-1)

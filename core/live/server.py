@@ -121,12 +121,9 @@ class LiveServer:
 
     def _sample(self, conn, me: Client, msg: Sample) -> None:
         if conn is not self.driver:
-            if self.driver is None and me.role == "viewer":
-                self._bad(conn, "role", "devices from a viewer: say hello as a driver first")
-                return
-            if conn is not self.driver:
-                self._bad(conn, "role", "devices from a viewer: another client drives")
-                return
+            why = "say hello as a driver first" if self.driver is None else "another client drives"
+            self._bad(conn, "role", f"devices from a viewer: {why}")
+            return
         if me.last_t is not None and msg.t <= me.last_t:
             self._bad(conn, "order", f"out of order: t {msg.t} after {me.last_t}")
             return
@@ -167,15 +164,19 @@ class LiveServer:
         latency = None
         if used is not None:
             latency = (time.perf_counter() - used.arrived) * 1e3
+        texts: dict[str, str] = {}  # one message per convention, whatever the client count
         for conn, me in list(self.clients.items()):
             transport = getattr(conn, "transport", None)
             if transport is not None and transport.get_write_buffer_size() > BACKLOG_BYTES:
                 self.stats.skipped_poses += 1
                 continue
-            room = session.in_room(pose, me.convention)
-            text = pose_message(session.steps, used.t if used else None, latency,
-                                room["root"], room["body_pos"], room["body_quat"])  # fmt: skip
-            asyncio.get_running_loop().create_task(_send(conn, text))
+            if me.convention not in texts:
+                room = session.in_room(pose, me.convention)
+                texts[me.convention] = pose_message(
+                    session.steps, used.t if used else None, latency,
+                    room["root"], room["body_pos"], room["body_quat"],
+                )  # fmt: skip
+            asyncio.get_running_loop().create_task(_send(conn, texts[me.convention]))
         if used is not None and latency is not None:
             self.stats.latencies_ms.append(latency)
             session.latest = None if session.latest is used else session.latest

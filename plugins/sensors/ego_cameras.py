@@ -66,6 +66,7 @@ class EgoCameras(Sensor):
         assert isinstance(cfg, EgoCamerasConfig)
         self.rig = RIGS[cfg.rig] if isinstance(cfg.rig, str) else cfg.rig
         self._images: torch.Tensor | None = None
+        self._owned = False  # whether _images is this sensor's own copy (after a replay)
 
     def spec(self, layout: Layout) -> ObsSpec:
         cfg = self.config
@@ -88,6 +89,7 @@ class EgoCameras(Sensor):
         with warnings.catch_warnings():  # read-only memory map: indexed, never written
             warnings.simplefilter("ignore", UserWarning)
             self._images = torch.from_numpy(images)  # (R, C, H, W) uint8, shared pages
+        self._owned = False
         g = torch.Generator().manual_seed(cfg.seed)
         shape = (NOISE_BANK, len(self.rig.cameras), cfg.height, cfg.width)
         self._noise = torch.randn(shape, generator=g) * cfg.noise
@@ -125,11 +127,11 @@ class EgoCameras(Sensor):
                 f"({', '.join(c.name for c in self.rig.cameras)}, or other poses)",
                 plugin=self.name,
             )
-        images = self._images.clone()  # the memory map is read-only and shared
-        images[rows] = torch.from_numpy(np.ascontiguousarray(stream.values))
-        self._images = images
-        self._noise = torch.zeros_like(self._noise)
-        self._gain = torch.ones_like(self._gain)
+        if not self._owned:  # the memory map is read-only and shared: copy it once
+            self._images, self._owned = self._images.clone(), True
+            self._noise = torch.zeros_like(self._noise)
+            self._gain = torch.ones_like(self._gain)
+        self._images[rows] = torch.from_numpy(np.ascontiguousarray(stream.values))
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
         if self._images is None or ctx.ref.rows is None:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import torch
 import yaml
-from helpers import TINY, TINY_TEACHER, assert_state_equal
+from helpers import TINY, TINY_TEACHER, assert_state_equal, image_student
 
 from retarget.cli.main import main
 from retarget.learn.dagger import DaggerConfig, DaggerLearner
@@ -181,23 +181,6 @@ def test_ppo_fine_tunes_a_distilled_student(teacher: Path, tmp_path: Path) -> No
                           atol=1e-5)  # fmt: skip
 
 
-def _image_student(tmp_path: Path, steps: int) -> Path:
-    """A tiny headset + aria-camera (2 x 16 x 24) student distilled from a tiny teacher."""
-    teacher = tmp_path / "teacher.yaml"
-    teacher.write_text(TINY_TEACHER)
-    assert main(["train", str(teacher), "--steps", str(steps), "--runs-dir", str(tmp_path),
-                 "--no-tensorboard"]) == 0  # fmt: skip
-    student = tmp_path / "student.yaml"
-    cams = "{type: ego_cameras, rig: aria, width: 24, height: 16}"
-    student.write_text(TINY.replace("name: tiny", "name: eyes")
-                       .replace("sensors: [three_point]", f"sensors: [hmd, {cams}]"))
-    assert main(["train", str(student), "--teacher", str(tmp_path / "teacher" / "latest"),
-                 "--steps", str(steps), "--runs-dir", str(tmp_path), "--no-tensorboard",
-                 "--set", "algorithm.minibatch_size=16",
-                 "--set", "sim.actuation=pd"]) == 0  # fmt: skip
-    return tmp_path / "eyes" / "latest"
-
-
 def test_an_image_student_distils_exports_and_matches_its_onnx(tmp_path) -> None:
     """A headset + camera-image student (SimXR): the actor gets a CNN for the ego_cameras
     source, learns from the teacher, and its ONNX export (image columns inside the flat
@@ -210,7 +193,7 @@ def test_an_image_student_distils_exports_and_matches_its_onnx(tmp_path) -> None
     from retarget.learn.encoders import InputEncoder
     from retarget.train.load import load_run
 
-    run = _image_student(tmp_path, steps=64)
+    run = image_student(tmp_path, steps=64)
     loaded = load_run(run, load_plugins(), num_envs=3)
     actor = loaded.algorithm.learner.actor
     assert isinstance(actor.encoder, InputEncoder) and actor.encoder.images[0].shape == (2, 16, 24)
@@ -232,7 +215,7 @@ def test_a_recorded_headset_capture_drives_the_image_student(tmp_path) -> None:
     from retarget.learn.columns import image_inputs
     from retarget.render.ego_rigs import RIGS
 
-    run = _image_student(tmp_path, steps=32)
+    run = image_student(tmp_path, steps=32)
     assert main(["motion", "generate", "--out", str(tmp_path / "clips"), "--names", "walk"]) == 0
     walk = tmp_path / "clips" / "walk.bvh"
     rec = tmp_path / "me.jsonl"

@@ -167,26 +167,16 @@ def test_the_session_follows_a_recording_as_play_input_does(run) -> None:
 
 def test_an_image_student_is_served_with_the_headsets_camera_frames(tmp_path) -> None:
     """A recording with frames streams to an image student: every step answered, no error."""
+    from helpers import image_student
+
     from retarget.live.replay import replay
 
-    teacher = tmp_path / "teacher.yaml"
-    from helpers import TINY_TEACHER
-
-    teacher.write_text(TINY_TEACHER)
-    assert main(["train", str(teacher), "--steps", "32", "--runs-dir", str(tmp_path),
-                 "--no-tensorboard"]) == 0  # fmt: skip
-    student = tmp_path / "student.yaml"
-    cams = "{type: ego_cameras, rig: aria, width: 24, height: 16}"
-    student.write_text(TINY.replace("name: tiny", "name: eyes")
-                       .replace("sensors: [three_point]", f"sensors: [hmd, {cams}]"))
-    assert main(["train", str(student), "--teacher", str(tmp_path / "teacher" / "latest"),
-                 "--steps", "32", "--runs-dir", str(tmp_path), "--no-tensorboard",
-                 "--set", "algorithm.minibatch_size=16", "--set", "sim.actuation=pd"]) == 0
+    run = image_student(tmp_path, steps=32)
     assert main(["motion", "generate", "--out", str(tmp_path / "clips"), "--names", "walk"]) == 0
     rec = tmp_path / "me.jsonl"
     assert main(["motion", "record", str(tmp_path / "clips" / "walk.bvh"), "--out", str(rec),
                  "--cameras", "aria", "--size", "24x16"]) == 0  # fmt: skip
-    with Running(tmp_path / "eyes" / "latest") as live:
+    with Running(run) as live:
         stats = asyncio.run(replay(rec, live.url, speed=8.0))
         summary = live.server.stats.summary()
     assert stats["errors"] == 0 and summary["bad_messages"] == {}, (stats, summary)
