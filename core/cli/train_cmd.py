@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 import json
-from contextlib import AbstractContextManager, nullcontext
+from collections.abc import Iterator
+from contextlib import AbstractContextManager, contextmanager, nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -22,6 +23,7 @@ from retarget.train.run_dir import (
 
 if TYPE_CHECKING:
     from retarget.recipe import ResolvedRecipe
+    from retarget.train.distributed import Comm
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -144,6 +146,16 @@ def _resume_recipe(run: Path, registry: Registry, threads: int | None):
     return resolved
 
 
+def _budget(args: argparse.Namespace, done: Any) -> Any:
+    """The stopping point: with --resume the budget is on top of what the run has done."""
+    from retarget.train.runner import Budget
+
+    return Budget(
+        steps=None if args.steps is None else done.env_steps + args.steps,
+        minutes=None if args.minutes is None else done.elapsed / 60.0 + args.minutes,
+    )
+
+
 def _figures(last: dict[str, float]) -> str:
     """What the progress bar shows: a policy's return and episode length, or an
     algorithm's own loss and error when it steps no episodes (a pose estimator)."""
@@ -153,7 +165,31 @@ def _figures(last: dict[str, float]) -> str:
             f"ep len {last.get('episode_length', 0.0):>5.1f}")  # fmt: skip
 
 
+@contextmanager
+def _rank_run_dir(comm: Comm, context: AbstractContextManager[Path]) -> Iterator[Path]:
+    """Rank 0 enters ``context`` (creating the run directory) and tells the other ranks
+    where it is; a single process just enters it."""
+    if comm.main:
+        with context as path:
+            comm.broadcast(str(path))
+            yield path
+    else:
+        yield Path(comm.broadcast(None))
+
+
 def run(args: argparse.Namespace, registry: Registry) -> int:
+    """``retarget train``, in one process or as one rank of a torchrun job."""
+    from retarget.train import distributed
+
+    comm = distributed.from_environment()
+    try:
+        return _train(args, registry, comm)
+    finally:
+        if comm.distributed:
+            distributed.shutdown()
+
+
+def _train(args: argparse.Namespace, registry: Registry, comm: Comm) -> int:
     from rich.progress import (
         BarColumn,
         Progress,
@@ -164,9 +200,11 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
 
     from retarget.cli.console import out
     from retarget.train.load import prepared_recipe
-    from retarget.train.runner import Budget, Trainer
+    from retarget.train.runner import Trainer
     from retarget.train.warm_start import INIT_FROM, warm_start
-    if args.steps is None and args.minutes is None:
+    if comm.distributed and comm.main:
+        out.print(f"data-parallel: {comm.size} ranks, {comm.local_size} on this machine")
+    if args.steps is None and args.minutes is None and comm.main:
         out.print("no --steps or --minutes given: training until Ctrl-C (checkpoint on exit)")
     given = {"checkpoint_every": args.checkpoint_every, "tensorboard": args.tensorboard}
     if args.resume and (args.init_from or args.teacher):
@@ -210,34 +248,41 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             if "actor" not in groups or c.entry.name in groups["actor"]
         ]
         name = resolved.recipe.name or _default_name(resolved, seen)
-        context = starting_run(args.runs_dir, name)  # removed again if the start fails
-    with context as run_dir:
-        settings = run_settings(run_dir, given, resume=bool(args.resume))
+        # only rank 0 creates it; removed again if the start fails
+        context = starting_run(args.runs_dir, name) if comm.main else nullcontext(Path())
+    with _rank_run_dir(comm, context) as run_dir:
+        settings = comm.broadcast(
+            run_settings(run_dir, given, resume=bool(args.resume)) if comm.main else None
+        )
         trainer = Trainer(
             resolved,
             run_dir,
             checkpoint_every=settings["checkpoint_every"],
             tensorboard=settings["tensorboard"],
             registry=registry,
+            comm=comm,
         )
         if args.resume:
             ckpt = latest_checkpoint(run_dir)
             trainer.restore(ckpt)
-            out.print(f"resumed {ckpt} at {trainer.progress.env_steps} steps")
+            if comm.main:
+                out.print(f"resumed {ckpt} at {trainer.progress.env_steps} steps")
         if args.init_from:
             start = warm_start(trainer.algorithm, trainer.env.obs_layout, args.init_from, registry)
-            (run_dir / INIT_FROM).write_text(f"{start.checkpoint}\n{start.summary()}\n")
+            if comm.main:
+                (run_dir / INIT_FROM).write_text(f"{start.checkpoint}\n{start.summary()}\n")
             trainer.save()  # a resume of this run starts from these weights, not from scratch
-            out.print(f"weights from {start.checkpoint}\n{start.summary()}", markup=False)
+            if comm.main:
+                out.print(f"weights from {start.checkpoint}\n{start.summary()}", markup=False)
+    if not comm.main:  # the other ranks train in step with rank 0 and print nothing
+        trainer.train(_budget(args, trainer.progress))
+        return 130 if trainer.stop_reason == "interrupted" else 0
     out.print(
-        f"run directory: {run_dir}  ({trainer.env.num_envs} envs, "
+        f"run directory: {run_dir}  ({trainer.env.num_envs} envs"
+        f"{f' per rank, {comm.size} ranks' if comm.distributed else ''}, "
         f"{trainer.env.character.name}, obs {dict(trainer.env.obs_dims)})"
     )
-    done = trainer.progress  # with --resume the budget is on top of what the run has done
-    budget = Budget(
-        steps=None if args.steps is None else done.env_steps + args.steps,
-        minutes=None if args.minutes is None else done.elapsed / 60.0 + args.minutes,
-    )
+    budget = _budget(args, trainer.progress)
     total = budget.steps
     columns = [
         TextColumn("[bold]train"),

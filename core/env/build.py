@@ -46,13 +46,15 @@ def env_from_recipe(
     clips: list[MotionClip] | None = None,
     terminations: bool = True,
     registry: Registry | None = None,
+    seed: int | None = None,
 ) -> RetargetEnv:
     """Instantiate every component of ``resolved``, load its motions and build the env.
 
     ``motions`` replaces the recipe's motion path (evaluation on other clips), ``clips``
     gives the clips themselves (already loaded or generated);
     ``terminations=False`` keeps only clip ends (evaluation follows runs through failures);
-    ``registry`` is the invocation's plugins (motion formats come from it).
+    ``registry`` is the invocation's plugins (motion formats come from it); ``seed``
+    replaces the recipe's (each rank of a distributed run has its own).
     """
     recipe = resolved.recipe
 
@@ -96,5 +98,5 @@ def env_from_recipe(
         scene=scene,
         options=options,
         sim=sim,
-        seed=recipe.seed,
+        seed=recipe.seed if seed is None else seed,
     )

@@ -44,7 +44,7 @@ from retarget.kinds.step import StepNeeds, StepPlugin
 from retarget.motion.clip import MotionClip
 from retarget.motion.library import MotionLibrary
 from retarget.motion.resample import resample
-from retarget.sim import BatchedSim, SimSettings
+from retarget.sim import SimSettings, make_sim
 from retarget.sim.world import build_world
 
 
@@ -81,7 +81,7 @@ class RetargetEnv:
         self._mocap_ids = self._scene_mocap_ids()
         self.reference = CharacterReference(character, self.world.model, layout, clips,
                                             mocap=self._clip_placements(len(clips)))  # fmt: skip
-        self.sim = BatchedSim(self.world.model, layout, n, sim)
+        self.sim = make_sim(self.world.model, layout, n, sim)
         self.sensors, self.observers = list(sensors), list(observers)
         for plugin in (*self.sensors, *self.observers):
             plugin.bind(layout)

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 
 from retarget.errors import PluginError
 from retarget.kinds.base import Plugin
+from retarget.train.distributed import SINGLE, Comm
 
 if TYPE_CHECKING:
     import torch
@@ -48,6 +49,13 @@ class Algorithm(Plugin):
     """True for a method that learns from the motion library instead of acting (a pose
     estimator): it needs a retarget environment (library, sensors), and the contract suite
     checks its :meth:`pose_estimator` instead of :meth:`act`."""
+    distributed: ClassVar[bool] = False
+    """True for an algorithm that trains data-parallel under torchrun: it uses :attr:`comm`
+    to start every rank from the same weights, average gradients and merge statistics.
+    ``retarget train`` refuses to start several ranks of an algorithm that does not."""
+    comm: Comm = SINGLE
+    """The ranks of this run (:mod:`retarget.train.distributed`), set before :meth:`setup`;
+    one process without torchrun."""
 
     @abstractmethod
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None: ...
@@ -63,6 +71,13 @@ class Algorithm(Plugin):
 
     @abstractmethod
     def load_state_dict(self, state: Mapping[str, Any]) -> None: ...
+
+    def fresh_rank(self, generator: torch.Generator) -> None:
+        """This rank resumes a distributed run whose checkpoint holds no state for it (the
+        run is resumed with more ranks than it was saved with): the shared weights, optimiser
+        and statistics were loaded from rank 0's state; forget what belonged to rank 0's
+        environments (its last observation, episode counters) and draw this rank's own
+        randomness from ``generator``. Only algorithms with :attr:`distributed` need it."""
 
     def prepare_recipe(self, recipe: dict[str, Any], registry: Registry) -> dict[str, Any]:
         """Amend a new run's recipe before it is resolved and locked: ``recipe`` is the

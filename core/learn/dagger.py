@@ -29,6 +29,7 @@ from retarget.learn.episodes import EpisodeTracker, clone_obs
 from retarget.learn.networks import GaussianActor
 from retarget.learn.normalizer import GroupNormalizer
 from retarget.learn.ppo import DeployedPolicy, torch_threads
+from retarget.train.distributed import SINGLE, Comm
 
 
 class DaggerLearner:
@@ -42,9 +43,12 @@ class DaggerLearner:
         num_envs: int,
         generator: torch.Generator | None = None,
         images: Sequence[ImageInput] = (),
+        comm: Comm = SINGLE,
     ) -> None:
-        """``images``: the student group's image sources (a convolutional encoder each)."""
+        """``images``: the student group's image sources (a convolutional encoder each);
+        ``comm``: the ranks of a data-parallel run (see :class:`~retarget.learn.ppo.PPOLearner`)."""
         self.config = c = config
+        self.comm = comm
         for group in (c.actor_group, c.teacher_group):
             if group not in obs_dims:
                 raise ValueError(
@@ -66,6 +70,7 @@ class DaggerLearner:
             generator=self.generator,
             images=images,
         )
+        comm.broadcast_modules([self.actor])
         self.obs_norm = GroupNormalizer({self.actor_key: dim}, clip=c.obs_clip)
         self.optimizer = torch.optim.Adam(self.actor.parameters(), lr=c.learning_rate)
         size = c.buffer_rollouts * c.rollout_steps * num_envs
@@ -118,8 +123,9 @@ class DaggerLearner:
             raise RuntimeError("DaggerLearner.set_teacher(policy) must be called first")
         if self.last_obs is None:
             self.last_obs = {k: v.float() for k, v in env.reset().items()}
-            if int(self.obs_norm.groups[self.actor_key].count) == 0:
-                self.obs_norm.update({self.actor_key: self.last_obs[self.actor_key]})
+            norm = self.obs_norm.groups[self.actor_key]
+            if int(norm.count) == 0:
+                norm.update_ranks(self.comm, self.last_obs[self.actor_key])
         obs = self.last_obs
         pending = GroupNormalizer({self.actor_key: self.buffer_obs.shape[1]})
         teacher_acts = torch.rand(self.num_envs, generator=self.generator) < self.beta()
@@ -138,7 +144,7 @@ class DaggerLearner:
             obs = {k: v.float() for k, v in next_obs.items()}
         self.last_obs = obs
         norm = self.obs_norm.groups[self.actor_key]
-        norm.merge(*pending.groups[self.actor_key].raw_stats())
+        norm.merge_ranks(self.comm, *pending.groups[self.actor_key].raw_stats())
         return {
             "action_gap": gap / c.rollout_steps,  # student vs teacher, on the student's states
             "beta": self.beta(),
@@ -178,6 +184,7 @@ class DaggerLearner:
                 loss = self.loss(self.buffer_obs[idx], self.buffer_labels[idx])
                 self.optimizer.zero_grad(set_to_none=True)
                 loss.backward()
+                self.comm.average_gradients(list(self.actor.parameters()))
                 nn.utils.clip_grad_norm_(self.actor.parameters(), c.max_grad_norm)
                 self.optimizer.step()
                 losses += float(loss.detach())
@@ -204,6 +211,14 @@ class DaggerLearner:
         return stats
 
     # ------------------------------------------------------------------ checkpoints
+
+    def fresh_rank(self, generator: torch.Generator) -> None:
+        """Forget rank 0's environment (a rank added on resume): own noise, a fresh rollout
+        start and episode counters (the label buffer stays: its labels are still right)."""
+        seed = torch.randint(0, 2**62, (1,), generator=generator).item()
+        self.generator.manual_seed(int(seed))
+        self.last_obs = None
+        self.episodes = EpisodeTracker(self.num_envs, self.config.episode_window)
 
     def state_dict(self) -> dict[str, Any]:
         """Everything a bit-exact resume needs (the teacher is reloaded from its run)."""

@@ -10,9 +10,13 @@ observation of one rollout is scaled the same way.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import torch
 from torch import nn
+
+if TYPE_CHECKING:
+    from retarget.train.distributed import Comm
 
 
 class RunningNormalizer(nn.Module):
@@ -45,6 +49,26 @@ class RunningNormalizer(nn.Module):
         self.mean += delta * n / total
         self.var.copy_(m2 / total)
         self.count.copy_(total if self.max_count is None else total.clamp(max=self.max_count))
+
+    @torch.no_grad()
+    def merge_ranks(
+        self, comm: Comm, count: torch.Tensor, mean: torch.Tensor, var: torch.Tensor
+    ) -> None:
+        """Merge this rank's batch statistics and every other rank's, in rank order, so all
+        ranks of a distributed run hold identical statistics (one rank: :meth:`merge`)."""
+        for n, m, v in comm.all_stats(count, mean, var):
+            if float(n) > 0:
+                self.merge(n, m, v)
+
+    @torch.no_grad()
+    def update_ranks(self, comm: Comm, x: torch.Tensor) -> None:
+        """:meth:`update` with the samples of every rank (see :meth:`merge_ranks`)."""
+        x = x.reshape(-1, x.shape[-1]).double()
+        n = torch.tensor(float(x.shape[0]), dtype=torch.float64)
+        if x.shape[0]:
+            self.merge_ranks(comm, n, x.mean(0), x.var(0, unbiased=False))
+        else:
+            self.merge_ranks(comm, n, self.mean.clone(), self.var.clone())
 
     def raw_stats(self) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """``(count, mean, var)`` for merging into another normaliser."""

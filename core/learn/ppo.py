@@ -34,6 +34,7 @@ from retarget.learn.networks import Critic, GaussianActor
 from retarget.learn.normalizer import GroupNormalizer, RunningNormalizer
 from retarget.learn.storage import RolloutStorage
 from retarget.learn.widen import sub_state, widen_module, widen_normalizer
+from retarget.train.distributed import SINGLE, Comm
 
 
 @contextmanager
@@ -87,11 +88,14 @@ class PPOLearner:
         generator: torch.Generator | None = None,
         residual: slice | None = None,
         images: Mapping[str, Sequence[ImageInput]] | None = None,
+        comm: Comm = SINGLE,
     ) -> None:
         """``residual``: columns of the raw actor observation added to the network's output
         (the policy's actions are that base plus a learned, explored residual); ``images``:
-        per group, its image sources, which get a convolutional encoder."""
+        per group, its image sources, which get a convolutional encoder; ``comm``: the ranks
+        of a data-parallel run (weights from rank 0, gradients averaged, statistics merged)."""
         self.config = c = config
+        self.comm = comm
         self.residual = residual
         seed = torch.randint(0, 2**62, (1,), generator=generator).item()
         self.generator = torch.Generator().manual_seed(int(seed))
@@ -119,6 +123,7 @@ class PPOLearner:
             generator=self.generator,
             images=(images or {}).get(self.critic_key, ()),
         )
+        comm.broadcast_modules([self.actor, self.critic])
         self.obs_norm = GroupNormalizer(dims, clip=c.obs_clip)
         # return statistics follow the improving policy: ~20 iterations of memory
         samples = c.rollout_steps * num_envs
@@ -172,7 +177,7 @@ class PPOLearner:
             if c.normalize_obs:  # groups without statistics yet start from these
                 for key, norm in self.obs_norm.groups.items():
                     if int(norm.count) == 0:
-                        norm.update(self.last_obs[key])
+                        norm.update_ranks(self.comm, self.last_obs[key])
         obs = self.last_obs
         st.clear()
         std = self.actor.std()
@@ -224,7 +229,7 @@ class PPOLearner:
         st.compute_returns(last_values, c.gamma, c.lam)
         if c.normalize_obs:
             for key, norm in self.obs_norm.groups.items():
-                norm.merge(*pending.groups[key].raw_stats())
+                norm.merge_ranks(self.comm, *pending.groups[key].raw_stats())
         if c.normalize_values:
             self._update_value_stats(st.returns)
         stats = {
@@ -242,7 +247,7 @@ class PPOLearner:
         rollout stay consistent with the critic the update starts from."""
         norm = self.value_norm
         old_mean, old_std = norm.mean.clone(), norm.var.sqrt()
-        norm.update(returns.reshape(-1, 1))
+        norm.update_ranks(self.comm, returns.reshape(-1, 1))
         new_mean, new_std = norm.mean, norm.var.sqrt()
         last = self.critic.net[-1]
         assert isinstance(last, nn.Linear)
@@ -289,6 +294,7 @@ class PPOLearner:
                     loss = loss - c.entropy_coef * self.actor.entropy()
                 self.optimizer.zero_grad(set_to_none=True)
                 loss.backward()
+                self.comm.average_gradients(self.params)
                 grad_norm += float(nn.utils.clip_grad_norm_(self.params, c.max_grad_norm))
                 self.optimizer.step()
                 with torch.no_grad():
@@ -361,6 +367,14 @@ class PPOLearner:
             self.last_obs = None
         self.iteration = int(state["iteration"])
         self.env_steps = int(state["env_steps"])
+
+    def fresh_rank(self, generator: torch.Generator) -> None:
+        """Forget rank 0's environment (a rank added on resume): its own noise, a fresh
+        rollout start and episode counters."""
+        seed = torch.randint(0, 2**62, (1,), generator=generator).item()
+        self.generator.manual_seed(int(seed))
+        self.last_obs = None
+        self.episodes = EpisodeTracker(self.num_envs, self.config.episode_window)
 
     def warm_start(self, state: Mapping[str, Any], inputs: Mapping[str, torch.Tensor]) -> None:
         """Networks and observation statistics from another run's :meth:`state_dict`, input

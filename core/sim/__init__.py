@@ -8,6 +8,7 @@ from retarget.lazy import lazy_exports
 
 if TYPE_CHECKING:
     from retarget.sim.actuation import apply_actuation, describe_actuation
+    from retarget.sim.backend import make_sim
     from retarget.sim.batched import BatchedSim
     from retarget.sim.settings import SimSettings
 
@@ -17,8 +18,9 @@ __getattr__ = lazy_exports(
         "apply_actuation": "retarget.sim.actuation",
         "describe_actuation": "retarget.sim.actuation",
         "BatchedSim": "retarget.sim.batched",
+        "make_sim": "retarget.sim.backend",
         "SimSettings": "retarget.sim.settings",
     },
 )
 
-__all__ = ["BatchedSim", "SimSettings", "apply_actuation", "describe_actuation"]
+__all__ = ["BatchedSim", "SimSettings", "apply_actuation", "describe_actuation", "make_sim"]

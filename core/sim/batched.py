@@ -5,8 +5,10 @@ this class of machine runs within noise of two processes while keeping everythin
 address space. State is gathered once per control step into preallocated float32 arrays that
 are exposed to plugins as torch tensors sharing their memory (no copy).
 
-A backend for another engine (e.g. a GPU one) implements the same four things: ``step``,
-``reset``, ``state`` and ``bad`` detection, with the same shapes.
+A backend for another engine subclasses it and gives the same ``step``, ``reset``,
+``set_mocap``, ``state_dict`` and bad-state detection over the same arrays
+(:class:`retarget.sim.warp_backend.WarpSim` runs MuJoCo Warp); :func:`make_sim` picks one
+from the recipe's ``sim.backend``.
 """
 
 from __future__ import annotations
@@ -80,20 +82,7 @@ class BatchedSim:
         )
         self.layout = layout
         self.num_envs = num_envs
-        self.batch = Batch(model, num_envs, nthread=self.settings.threads, persistent=True)
-        self._qpos = self.batch.bind("qpos")
-        self._qvel = self.batch.bind("qvel")
-        self._ctrl = self.batch.bind("ctrl")
-        self._time = self.batch.bind("time")
-        self._xpos = self.batch.bind("xpos")
-        self._xquat = self.batch.bind("xquat")
-        self._cvel = self.batch.bind("cvel")
-        self._subtree_com = self.batch.bind("subtree_com")
-        self._site_xpos = self.batch.bind("site_xpos")
-        self._site_xquat = self.batch.bind("site_xquat")
-        self._cfrc = self.batch.bind("cfrc_ext")
-        self._mocap_pos = self.batch.bind("mocap_pos")  # (N, nmocap, 3): scene props' poses
-        self._mocap_quat = self.batch.bind("mocap_quat")  # (N, nmocap, 4) wxyz
+        self._open()
         self._nq, self._nv = layout.nq, layout.nv  # the character's block; scene joints follow
         self._bodies = np.asarray(layout.body_ids, dtype=np.intp)
         self._tree_roots = np.asarray(model.body_rootid[self._bodies], dtype=np.intp)
@@ -121,6 +110,19 @@ class BatchedSim:
         # time to 0) is always visible, even in an env's first step.
         self._time[:] = 1.0
         self.gather()
+
+    def _open(self) -> None:
+        """Create the engine's batch and the live ``(N, ...)`` views :meth:`gather` reads."""
+        self.batch = Batch(self.model, self.num_envs, nthread=self.settings.threads,
+                           persistent=True)  # fmt: skip
+        for field in ("qpos", "qvel", "ctrl", "time", "xpos", "xquat", "cvel", "subtree_com",
+                      "site_xpos", "site_xquat", "mocap_pos", "mocap_quat"):  # fmt: skip
+            setattr(self, f"_{field}", self.batch.bind(field))
+        self._cfrc = self.batch.bind("cfrc_ext")
+
+    def _copy_env(self, i: int, data: mujoco.MjData) -> None:
+        """Environment ``i``'s whole simulation (contacts included) into ``data``."""
+        self.batch.get_data(i, data)
 
     # ------------------------------------------------------------------ stepping
 
@@ -249,7 +251,7 @@ class BatchedSim:
         mean = np.zeros(self.num_envs)
         data = self._scratch
         for i in range(self.num_envs):  # BatchedSim is where per-environment loops live
-            self.batch.get_data(i, data)
+            self._copy_env(i, data)
             deepest[i], mean[i] = self._overlap(data)
         return deepest, mean
 
@@ -294,7 +296,7 @@ class BatchedSim:
             self._scratch = mujoco.MjData(self.model)
         out = []
         for i in range(self.num_envs):  # BatchedSim is where per-environment loops live
-            self.batch.get_data(i, self._scratch)
+            self._copy_env(i, self._scratch)
             out.append(fn(self._scratch))
         return out
 

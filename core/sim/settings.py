@@ -13,6 +13,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 Actuation = Literal["torque", "pd"]
 ACTUATIONS: tuple[str, ...] = get_args(Actuation)
+Backend = Literal["mujoco", "warp"]
 
 
 class SimSettings(BaseModel):
@@ -35,6 +36,19 @@ class SimSettings(BaseModel):
         description="pd: angle error (rad) at which a servo reaches its torque limit",
     )
     pd_damping: float = Field(0.1, ge=0, le=10, description="pd: kd = pd_damping * kp (seconds)")
+    backend: Backend = Field(
+        "mujoco",
+        description="mujoco: MuJoCo's C engine on a CPU thread pool; warp: MuJoCo Warp "
+        "(`pip install 'retarget[warp]'`), for a GPU (runs, slowly, on a CPU too)",
+    )
+    warp_contacts: int | None = Field(
+        None, ge=1, le=100_000,
+        description="warp: contacts allocated per world (default: MuJoCo Warp's estimate)",
+    )
+    warp_constraints: int | None = Field(
+        None, ge=1, le=100_000,
+        description="warp: constraint rows allocated per world (default: MuJoCo Warp's estimate)",
+    )
 
     @property
     def timestep(self) -> float:

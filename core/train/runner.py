@@ -4,11 +4,17 @@ Stopping is cooperative: Ctrl-C (SIGINT) or SIGTERM sets a flag that the loop ch
 each iteration, so the checkpoint written on the way out is of a complete iteration. A second
 Ctrl-C aborts at once. Checkpoints are written atomically (temp file, fsync, rename), so a run
 killed mid-write keeps its previous checkpoint.
+
+Under torchrun every rank runs this loop in step with the others: stopping (budget, Ctrl-C, a
+non-finite statistic) is decided together, environment steps are counted over all ranks, and
+rank 0 writes the checkpoint holding every rank's state (its own at the top level, so eval,
+play and export read a distributed run like any other; the others under ``ranks``).
 """
 
 from __future__ import annotations
 
 import math
+import os
 import random
 import signal
 import sys
@@ -28,6 +34,7 @@ from retarget.kinds import Algorithm
 from retarget.recipe import ResolvedRecipe, write_lock
 from retarget.registry import Registry
 from retarget.train.checkpoint import load_checkpoint, save_checkpoint
+from retarget.train.distributed import SINGLE, Comm
 from retarget.train.logger import MetricsLogger
 from retarget.train.run_dir import CHECKPOINTS, RunLock
 
@@ -75,6 +82,7 @@ class Trainer:
         checkpoint_every: int = 10,
         tensorboard: bool = True,
         registry: Registry | None = None,
+        comm: Comm = SINGLE,
     ) -> None:
         if "algorithm" not in resolved.components:
             raise RecipeError(
@@ -83,22 +91,36 @@ class Trainer:
                 field="algorithm",
                 hint="add `algorithm: ppo` to the recipe or pass --algorithm ppo",
             )
-        self.resolved, self.run = resolved, run
-        self._lock = RunLock(run).acquire()  # one writer per run directory
-        self.checkpoint_every = checkpoint_every
-        generator = seed_everything(resolved.recipe.seed)
-        self.env = env_from_recipe(
-            resolved, num_envs=num_envs, threads=threads, registry=registry
-        )
+        self.resolved, self.run, self.comm = resolved, run, comm
         algorithm = resolved.component("algorithm").instantiate()
         assert isinstance(algorithm, Algorithm)
+        if comm.distributed and not algorithm.distributed:
+            raise RecipeError(
+                f"algorithm '{algorithm.name}' does not train data-parallel",
+                file=resolved.source.path,
+                field="algorithm",
+                hint="run it as one process (without torchrun), or use ppo or dagger",
+            )
+        # one writer per run directory: rank 0 of a distributed run
+        self._lock = RunLock(run).acquire() if comm.main else None
+        self.checkpoint_every = checkpoint_every
+        seed = resolved.recipe.seed + comm.rank  # each rank its own episodes and noise
+        generator = seed_everything(seed)
+        self._rank_generator = torch.Generator().manual_seed(seed)
+        if threads is None and comm.local_size > 1 and resolved.recipe.sim.threads == 0:
+            threads = max(1, (os.cpu_count() or 1) // comm.local_size)  # share the cores
+        self.env = env_from_recipe(
+            resolved, num_envs=num_envs, threads=threads, registry=registry, seed=seed
+        )
         self.algorithm = algorithm
+        algorithm.comm = comm
         if registry is not None:
             self.algorithm.connect(registry)
         self.algorithm.setup(self.env, generator)
         self.progress = Progress()
-        self.logger = MetricsLogger(run, tensorboard=tensorboard)
-        write_lock(resolved, run)
+        self.logger = MetricsLogger(run, tensorboard=tensorboard) if comm.main else None
+        if comm.main:
+            write_lock(resolved, run)
         self._stop_requests = 0
         self._saving = False
 
@@ -126,19 +148,39 @@ class Trainer:
             self._saving = False
 
     def save(self) -> Path:
+        """Write the checkpoint of this iteration (every rank takes part; rank 0 writes)."""
         path = self.run / CHECKPOINTS / f"ckpt-{self.progress.iteration:07d}.pt"
-        save_checkpoint(path, self.state())
+        states = self.comm.gather(self.state())
+        if states is not None:
+            state = states[0]
+            if len(states) > 1:
+                state["world_size"] = len(states)
+                state["ranks"] = [{k: s[k] for k in ("algorithm", "env", "rng")}
+                                  for s in states[1:]]  # fmt: skip
+            save_checkpoint(path, state)
+        self.comm.barrier()  # no rank runs ahead of a checkpoint still being written
         return path
 
     def restore(self, path: Path) -> None:
+        """Continue from ``path``. A rank the checkpoint holds state for takes it up exactly;
+        one it does not (more ranks than it was saved with) takes rank 0's weights and
+        statistics, and keeps its own fresh environments and randomness."""
         state = load_checkpoint(path)
-        self.algorithm.load_state_dict(state["algorithm"])
-        self.env.load_state_dict(state["env"])
+        rank = self.comm.rank
+        ranks = state.get("ranks", [])
+        own = state if rank == 0 else (ranks[rank - 1] if rank <= len(ranks) else None)
         self.progress = Progress(**state["progress"])
-        self.logger.drop_after(self.progress.iteration)
-        torch.set_rng_state(state["rng"]["torch"])
-        np.random.set_state(state["rng"]["numpy"])
-        random.setstate(state["rng"]["python"])
+        if self.logger is not None:
+            self.logger.drop_after(self.progress.iteration)
+        if own is None:
+            self.algorithm.load_state_dict(state["algorithm"])
+            self.algorithm.fresh_rank(self._rank_generator)
+            return
+        self.algorithm.load_state_dict(own["algorithm"])
+        self.env.load_state_dict(own["env"])
+        torch.set_rng_state(own["rng"]["torch"])
+        np.random.set_state(own["rng"]["numpy"])
+        random.setstate(own["rng"]["python"])
 
     # ------------------------------------------------------------------ loop
 
@@ -162,16 +204,16 @@ class Trainer:
 
     def _check_finite(self, stats: dict[str, float]) -> None:
         """Stop at the first non-finite statistic (a loss, a return): running on would only
-        overwrite good checkpoints with NaN weights."""
-        for key, value in stats.items():
-            if not math.isfinite(float(value)):
-                raise SimulationError(
-                    f"training went non-finite at iteration {self.progress.iteration + 1}: "
-                    f"{key} = {value}",
-                    file=str(self.run),
-                    hint="the checkpoints written so far are intact; resume from the last one "
-                    "with a lower learning rate, or check the reward terms",
-                )
+        overwrite good checkpoints with NaN weights. Every rank stops when one sees it."""
+        bad = [(k, v) for k, v in stats.items() if not math.isfinite(float(v))]
+        if self.comm.any(bool(bad)):
+            what = f"{bad[0][0]} = {bad[0][1]}" if bad else "on another rank"
+            raise SimulationError(
+                f"training went non-finite at iteration {self.progress.iteration + 1}: {what}",
+                file=str(self.run),
+                hint="the checkpoints written so far are intact; resume from the last one "
+                "with a lower learning rate, or check the reward terms",
+            )
 
     def train(self, budget: Budget, on_iteration: Callable[[Progress], None] | None = None) -> Path:
         """Run until the budget is spent or a stop is requested; returns the last checkpoint."""
@@ -182,7 +224,7 @@ class Trainer:
         last = None
         try:
             start = time.perf_counter() - self.progress.elapsed
-            while not budget.done(self.progress.env_steps, self.progress.elapsed):
+            while not self.comm.any(budget.done(self.progress.env_steps, self.progress.elapsed)):
                 before = self.env.total_steps
                 ends_before = self.env.termination_counts
                 stats = self.algorithm.train_iteration(self.env)
@@ -193,16 +235,20 @@ class Trainer:
                 stepped = self.env.total_steps - before
                 # an algorithm that learns from the library without stepping (a pose
                 # estimator) reports the samples it used instead
-                p.env_steps += stepped if stepped else int(stats.pop("samples", 0))
+                local = stepped if stepped else int(stats.pop("samples", 0))
+                p.env_steps += int(self.comm.total(local))
                 p.elapsed = time.perf_counter() - start
                 p.last = {k: float(v) for k, v in stats.items()}
                 p.last["steps_per_s_total"] = p.env_steps / max(p.elapsed, 1e-9)
-                self.logger.log(
-                    p.env_steps, {"iteration": p.iteration, "elapsed_s": p.elapsed, **p.last}
-                )
+                if self.logger is not None:
+                    self.logger.log(
+                        p.env_steps, {"iteration": p.iteration, "elapsed_s": p.elapsed, **p.last}
+                    )
                 if on_iteration is not None:
                     on_iteration(p)
-                if self._stop_requests:
+                if self.comm.any(bool(self._stop_requests)):
+                    if not self._stop_requests:
+                        self.stop_reason = "interrupted"  # another rank was asked to stop
                     break
                 if p.iteration % self.checkpoint_every == 0:
                     last = self._save_uninterrupted()
@@ -210,6 +256,8 @@ class Trainer:
         finally:
             for sig, handler in previous.items():
                 signal.signal(sig, handler)
-            self.logger.close()
-            self._lock.release()
+            if self.logger is not None:
+                self.logger.close()
+            if self._lock is not None:
+                self._lock.release()
         return last

@@ -54,6 +54,7 @@ class Dagger(Algorithm):
 
     name = "dagger"
     Config = DaggerConfig
+    distributed = True
 
     def __init__(
         self,
@@ -172,7 +173,8 @@ class Dagger(Algorithm):
         try:
             images = image_inputs(env, self.config.actor_group)
             self.learner = DaggerLearner(
-                self.config, env.obs_dims, env.action_dim, env.num_envs, generator, images
+                self.config, env.obs_dims, env.action_dim, env.num_envs, generator, images,
+                comm=self.comm,
             )
         except ValueError as exc:
             raise PluginError(str(exc), plugin=self.name) from None
@@ -231,6 +233,9 @@ class Dagger(Algorithm):
 
     def load_state_dict(self, state: Mapping[str, Any]) -> None:
         self._ready().load_state_dict(state)
+
+    def fresh_rank(self, generator: torch.Generator) -> None:
+        self._ready().fresh_rank(generator)
 
 
 @retarget.hookimpl

@@ -26,6 +26,7 @@ class PPO(Algorithm):
 
     name = "ppo"
     Config = PPOConfig
+    distributed = True
 
     def __init__(self, config: PPOConfig | None = None) -> None:
         super().__init__(config)
@@ -48,7 +49,8 @@ class PPO(Algorithm):
         groups = (self.config.actor_group, self.config.critic_group)
         images = {g: image_inputs(env, g) for g in groups}
         self.learner = PPOLearner(
-            self.config, env.obs_dims, env.action_dim, env.num_envs, generator, residual, images
+            self.config, env.obs_dims, env.action_dim, env.num_envs, generator, residual, images,
+            comm=self.comm,
         )
 
     def _ready(self) -> PPOLearner:
@@ -71,6 +73,9 @@ class PPO(Algorithm):
 
     def load_state_dict(self, state: Mapping[str, Any]) -> None:
         self._ready().load_state_dict(state)
+
+    def fresh_rank(self, generator: torch.Generator) -> None:
+        self._ready().fresh_rank(generator)
 
     def warm_start(self, state: Mapping[str, Any], inputs: Mapping[str, torch.Tensor]) -> None:
         self._ready().warm_start(state, inputs)
