@@ -39,15 +39,16 @@ _PULLED = ("qpos", "qvel", "time", "xpos", "xquat", "cvel", "subtree_com", "site
 def import_warp() -> tuple[Any, Any]:
     """``(warp, mujoco_warp)``, or a clear error saying how to install them."""
     try:
-        import mujoco_warp
         import warp
+
+        warp.config.quiet = True  # before MuJoCo Warp initialises it: no per-kernel lines
+        import mujoco_warp
     except ImportError as exc:
         raise RetargetError(
             f"sim.backend 'warp' needs MuJoCo Warp, which is not installed ({exc})",
             field="sim.backend",
             hint="pip install 'retarget[warp]' (or set sim.backend: mujoco)",
         ) from None
-    warp.config.quiet = True
     return warp, mujoco_warp
 
 
