@@ -59,7 +59,7 @@ def test_warp_agrees_with_c_on_a_control_step(tmp_path: Path) -> None:
 
 
 def test_unknown_or_missing_backend_is_a_clear_error(tmp_path: Path) -> None:
-    with pytest.raises(RetargetError, match="sim.backend"):
+    with pytest.raises(RetargetError, match=r"sim\.backend"):
         _env(tmp_path, "bullet")
     if not HAVE_WARP:
         with pytest.raises(RetargetError, match="retarget\\[warp\\]"):
