@@ -55,7 +55,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "the recipe's own",
     )
     parser.add_argument("--runs-dir", default="runs", help="where run directories go")
-    parser.add_argument("--num-envs", type=count(1, 65536), help="override env.num_envs")
+    parser.add_argument(
+        "--num-envs", type=count(1, 65536),
+        help="override env.num_envs (per rank under torchrun: `torchrun --nproc-per-node K -m "
+        "retarget train ...` trains K ranks data-parallel)",
+    )
     parser.add_argument(
         "--threads",
         type=count(0, 1024),

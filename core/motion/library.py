@@ -80,6 +80,7 @@ class MotionLibrary:
         self.length = t(lengths, torch.long)
         self.weights = t(np.array(w), torch.float64)
         self.device = torch.device(device)
+        self._offsets: dict[tuple[int, ...], torch.Tensor] = {}
 
     @property
     def num_clips(self) -> int:
@@ -104,7 +105,11 @@ class MotionLibrary:
         self, clip: torch.Tensor, frame: torch.Tensor, offsets: Sequence[int] = (0,)
     ) -> torch.Tensor:
         """Flat row indices ``(N, W)`` of ``frame + offsets`` clamped to each clip's frames."""
-        off = torch.as_tensor(list(offsets), dtype=torch.long, device=self.device)
+        key = tuple(offsets)
+        off = self._offsets.get(key)
+        if off is None:  # the same few windows are asked for every step: made once each
+            off = torch.as_tensor(list(key), dtype=torch.long, device=self.device)
+            self._offsets[key] = off
         f = frame[:, None] + off[None, :]
         last = (self.length[clip] - 1)[:, None]
         f = torch.minimum(torch.clamp(f, min=0), last)
