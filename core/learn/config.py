@@ -69,6 +69,12 @@ class PPOConfig(PluginConfig):
     critic_group: str = "critic"
     collect_threads: int = Field(1, ge=0, description="torch threads while acting; 0: leave")
     update_threads: int = Field(2, ge=0, description="torch threads while updating; 0: leave")
+    overlap: bool = Field(
+        False,
+        description="update on each rollout in a thread while the next is collected: more "
+        "steps/s, one update of policy lag (learned less per sample in the project's "
+        "measurement: retarget.learn.overlap)",
+    )
     episode_window: int = Field(100, gt=0, description="finished episodes averaged in stats")
     critic_warmup: int = Field(
         0,
@@ -133,4 +139,10 @@ class DaggerConfig(PluginConfig):
     obs_clip: float = Field(10.0, gt=0)
     collect_threads: int = Field(1, ge=0, description="torch threads while acting; 0: leave")
     update_threads: int = Field(2, ge=0, description="torch threads while updating; 0: leave")
+    overlap: bool = Field(
+        False,
+        description="update on each rollout in a thread while the next is collected: more "
+        "steps/s, one update of policy lag (learned less per sample in the project's "
+        "measurement: retarget.learn.overlap)",
+    )
     episode_window: int = Field(100, gt=0, description="finished episodes averaged in stats")

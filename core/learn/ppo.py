@@ -32,6 +32,7 @@ from retarget.learn.config import PPOConfig
 from retarget.learn.episodes import EpisodeTracker, clone_obs
 from retarget.learn.networks import Critic, GaussianActor
 from retarget.learn.normalizer import GroupNormalizer, RunningNormalizer
+from retarget.learn.overlap import OverlapState
 from retarget.learn.storage import RolloutStorage
 from retarget.learn.widen import sub_state, widen_module, widen_normalizer
 from retarget.train.distributed import SINGLE, Comm
@@ -134,19 +135,24 @@ class PPOLearner:
         self.storage = RolloutStorage(c.rollout_steps, num_envs, dims, action_dim)
         self.last_obs: dict[str, torch.Tensor] | None = None
         self.episodes = EpisodeTracker(num_envs, c.episode_window)
+        self._pending: tuple[GroupNormalizer, RolloutStorage] | None = None
+        self.overlap = OverlapState(self) if c.overlap else None
         self.iteration = 0
         self.env_steps = 0
 
     # ------------------------------------------------------------------ helpers
 
-    def _normalize(self, key: str, x: torch.Tensor) -> torch.Tensor:
-        return self.obs_norm.group(key, x) if self.config.normalize_obs else x
+    def _normalize(self, key: str, x: torch.Tensor, nets: Any = None) -> torch.Tensor:
+        norm = (nets or self).obs_norm
+        return norm.group(key, x) if self.config.normalize_obs else x
 
-    def _value(self, critic_obs: torch.Tensor) -> torch.Tensor:
-        """Value in reward units of already-normalised critic observations."""
-        v = self.critic(critic_obs)
+    def _value(self, critic_obs: torch.Tensor, nets: Any = None) -> torch.Tensor:
+        """Value in reward units of already-normalised critic observations (of ``nets``'
+        critic: the learner's own, or the acting copy of an overlapped iteration)."""
+        n = nets or self
+        v = n.critic(critic_obs)
         if self.config.normalize_values:
-            v = v * self.value_norm.var.sqrt().float() + self.value_norm.mean.float()
+            v = v * n.value_norm.var.sqrt().float() + n.value_norm.mean.float()
         return v
 
     def _base(self, raw_actor_obs: torch.Tensor) -> torch.Tensor | float:
@@ -170,8 +176,19 @@ class PPOLearner:
     # ------------------------------------------------------------------ collection
 
     @torch.no_grad()
-    def collect(self, env: VecEnv) -> dict[str, float]:
-        c, st = self.config, self.storage
+    def collect(
+        self,
+        env: VecEnv,
+        nets: Any = None,
+        storage: RolloutStorage | None = None,
+        absorb: bool = True,
+    ) -> dict[str, float]:
+        """One rollout into ``storage`` (default: the learner's), acting with ``nets`` (default:
+        the learner's own networks and statistics). With ``absorb`` its observation and return
+        statistics are merged into the learner's at once; without, they wait for
+        :meth:`absorb` (an overlapped iteration merges them after the concurrent update)."""
+        c = self.config
+        st = storage if storage is not None else self.storage
         if self.last_obs is None:
             self.last_obs = {k: v.float() for k, v in env.reset().items()}
             if c.normalize_obs:  # groups without statistics yet start from these
@@ -180,7 +197,8 @@ class PPOLearner:
                         norm.update_ranks(self.comm, self.last_obs[key])
         obs = self.last_obs
         st.clear()
-        std = self.actor.std()
+        actor = (nets or self).actor
+        std = actor.std()
         term_sums: dict[str, float] = {}  # per reward term: episode sums x finished episodes
         term_count = 0.0
         # raw observation statistics of this rollout, merged into the normaliser at its end
@@ -188,13 +206,13 @@ class PPOLearner:
         for _ in range(c.rollout_steps):
             if c.normalize_obs:
                 pending.update(obs)
-            a_obs = self._normalize(self.actor_key, obs[self.actor_key])
-            c_obs = self._normalize(self.critic_key, obs[self.critic_key])
-            mean = self.actor(a_obs)
+            a_obs = self._normalize(self.actor_key, obs[self.actor_key], nets)
+            c_obs = self._normalize(self.critic_key, obs[self.critic_key], nets)
+            mean = actor(a_obs)
             noise = torch.randn(mean.shape, generator=self.generator)
             action = mean + noise * std  # a residual when ``residual`` is set
-            log_prob = self.actor.log_prob(mean, action)
-            value = self._value(c_obs)
+            log_prob = actor.log_prob(mean, action)
+            value = self._value(c_obs, nets)
             next_obs, reward, terminated, truncated, info = env.step(
                 action + self._base(obs[self.actor_key])
             )
@@ -204,7 +222,8 @@ class PPOLearner:
             if truncated.any():
                 final = info.get("final_obs", next_obs)[self.critic_key].float()
                 bootstrap = torch.where(
-                    truncated, self._value(self._normalize(self.critic_key, final)), 0.0
+                    truncated, self._value(self._normalize(self.critic_key, final, nets), nets),
+                    0.0,
                 )
             st.add(
                 {self.actor_key: a_obs, self.critic_key: c_obs},
@@ -225,13 +244,13 @@ class PPOLearner:
                 term_count += weight
             obs = {k: v.float() for k, v in next_obs.items()}
         self.last_obs = obs
-        last_values = self._value(self._normalize(self.critic_key, obs[self.critic_key]))
+        last_values = self._value(
+            self._normalize(self.critic_key, obs[self.critic_key], nets), nets
+        )
         st.compute_returns(last_values, c.gamma, c.lam)
-        if c.normalize_obs:
-            for key, norm in self.obs_norm.groups.items():
-                norm.merge_ranks(self.comm, *pending.groups[key].raw_stats())
-        if c.normalize_values:
-            self._update_value_stats(st.returns)
+        self._pending = (pending, st)
+        if absorb:
+            self.absorb()
         stats = {
             "mean_reward": float(st.rewards.mean()),
             "episodes_finished": float(self.episodes.end_rollout()),
@@ -239,6 +258,20 @@ class PPOLearner:
         if term_count:  # mean episode sum of each reward term (the env's info["episode"])
             stats.update({f"episode_{k}": v / term_count for k, v in term_sums.items()})
         return stats
+
+    @torch.no_grad()
+    def absorb(self) -> None:
+        """Merge the last rollout's observation statistics and returns into the learner's
+        normalisers (PopArt keeps the critic's predictions in reward units)."""
+        if self._pending is None:
+            return
+        pending, st = self._pending
+        self._pending = None
+        if self.config.normalize_obs:
+            for key, norm in self.obs_norm.groups.items():
+                norm.merge_ranks(self.comm, *pending.groups[key].raw_stats())
+        if self.config.normalize_values:
+            self._update_value_stats(st.returns)
 
     @torch.no_grad()
     def _update_value_stats(self, returns: torch.Tensor) -> None:
@@ -256,8 +289,13 @@ class PPOLearner:
 
     # ------------------------------------------------------------------ update
 
-    def update(self) -> dict[str, float]:
-        c, st = self.config, self.storage
+    def update(
+        self, storage: RolloutStorage | None = None, generator: torch.Generator | None = None
+    ) -> dict[str, float]:
+        """The clipped PPO update on ``storage`` (default: the learner's last rollout),
+        minibatches drawn from ``generator`` (default: the learner's)."""
+        c = self.config
+        st = storage if storage is not None else self.storage
         if c.normalize_advantages:
             adv = st.advantages
             st.advantages.copy_((adv - adv.mean()) / (adv.std() + 1e-8))
@@ -267,7 +305,7 @@ class PPOLearner:
         grad_norm, n = 0.0, 0
         v_mean, v_std = self.value_norm.mean.float(), self.value_norm.var.sqrt().float()
         for _ in range(c.epochs):
-            for mb in st.minibatches(count, self.generator):
+            for mb in st.minibatches(count, generator or self.generator):
                 mean = self.actor(mb[f"obs/{self.actor_key}"])
                 log_prob = self.actor.log_prob(mean, mb["actions"])
                 log_ratio = log_prob - mb["log_probs"]
@@ -315,7 +353,10 @@ class PPOLearner:
         return float(1.0 - (returns - values).var() / var) if var > 1e-12 else 0.0
 
     def train_iteration(self, env: VecEnv) -> dict[str, float]:
-        """Collect ``rollout_steps`` steps from ``env`` and run the PPO update on them."""
+        """Collect ``rollout_steps`` steps from ``env`` and run the PPO update on them (with
+        ``overlap``: update on the previous rollout while this one is collected)."""
+        if self.overlap is not None:
+            return self.overlap.iteration(env)
         c = self.config
         samples = c.rollout_steps * self.num_envs
         with torch_threads(c.collect_threads):
@@ -353,6 +394,7 @@ class PPOLearner:
             **self.episodes.state_dict(),
             "iteration": self.iteration,
             "env_steps": self.env_steps,
+            **({"overlap": self.overlap.state_dict()} if self.overlap is not None else {}),
         }
 
     def load_state_dict(self, state: Mapping[str, Any]) -> None:
@@ -367,6 +409,9 @@ class PPOLearner:
             self.last_obs = None
         self.iteration = int(state["iteration"])
         self.env_steps = int(state["env_steps"])
+        if self.overlap is not None:
+            self.overlap.load_state_dict(state.get("overlap") if self.last_obs is not None
+                                         else None)  # fmt: skip
 
     def fresh_rank(self, generator: torch.Generator) -> None:
         """Forget rank 0's environment (a rank added on resume): its own noise, a fresh
@@ -375,6 +420,8 @@ class PPOLearner:
         self.generator.manual_seed(int(seed))
         self.last_obs = None
         self.episodes = EpisodeTracker(self.num_envs, self.config.episode_window)
+        if self.overlap is not None:  # rank 0's waiting rollout is rank 0's to learn from
+            self.overlap.load_state_dict(None)
 
     def warm_start(self, state: Mapping[str, Any], inputs: Mapping[str, torch.Tensor]) -> None:
         """Networks and observation statistics from another run's :meth:`state_dict`, input

@@ -161,3 +161,14 @@ def test_an_algorithm_that_cannot_train_data_parallel_is_refused(tmp_path: Path)
     resolved = prepared_recipe(load(tmp_path / "est.yaml", registry), registry)
     with pytest.raises(RecipeError, match="does not train data-parallel"):
         Trainer(resolved, tmp_path / "run", comm=Comm(rank=0, size=2), registry=registry)
+
+
+def test_two_ranks_of_overlapped_ppo_share_weights(tmp_path: Path) -> None:
+    recipe = TINY.replace("  type: ppo\n", "  type: ppo\n  overlap: true\n")
+    (tmp_path / "tiny.yaml").write_text(recipe)
+    _torchrun(2, "tiny.yaml", "--steps", str(6 * STEPS_PER_ITER), "--runs-dir", "runs",
+              "--no-tensorboard", cwd=tmp_path)  # fmt: skip
+    state = _last_checkpoint(tmp_path / "runs" / "tiny" / "latest")
+    assert state["progress"]["iteration"] == 2  # 4 rollouts of 2 x 32 steps (2 + 1 + 1)
+    _same_weights(state, ("actor", "critic", "obs_norm", "value_norm"))
+    assert state["algorithm"]["overlap"]["ready"] is not None
