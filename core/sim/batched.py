@@ -137,8 +137,12 @@ class BatchedSim:
         t1 = time.perf_counter()
         # MuJoCo resets a blown-up env to the model defaults (time restarts) in any substep
         expected = before + self.settings.substeps * self.settings.timestep
-        bad = self._time < expected - 0.5 * self.settings.timestep
-        bad |= ~np.isfinite(self._qpos).all(axis=1) | ~np.isfinite(self._qvel).all(axis=1)
+        return self._finish_step(self._time < expected - 0.5 * self.settings.timestep, t0, t1)
+
+    def _finish_step(self, bad: np.ndarray, t0: float, t1: float) -> np.ndarray:
+        """After the physics (timed ``t0``..``t1``): flag non-finite or exploding states on
+        top of the engine's own ``bad`` mask, count them, gather the state."""
+        bad = bad | ~np.isfinite(self._qpos).all(axis=1) | ~np.isfinite(self._qvel).all(axis=1)
         bad |= (np.abs(self._qvel) > HUGE_VELOCITY).any(axis=1)
         self.bad_count += int(bad.sum())
         self.gather()
