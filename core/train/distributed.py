@@ -2,8 +2,10 @@
 
 ``torchrun --nproc-per-node K -m retarget train RECIPE`` starts K processes; each steps its own
 batch of environments with its own seed, and the learners keep one set of weights by
-averaging gradients before every optimiser step (gloo on CPU, nccl when the parameters live on
-a GPU). Running observation and return statistics are merged from every rank's samples, in
+averaging gradients before every optimiser step. The learners keep their tensors on the CPU
+(the physics hands them CPU arrays), so the collectives run over gloo; ``RETARGET_DIST_BACKEND``
+names another torch.distributed backend for learners that move their tensors to a GPU (nccl).
+Running observation and return statistics are merged from every rank's samples, in
 rank order, so every rank normalises with identical numbers. Rank 0 alone writes the run
 directory (logs, checkpoints, the lock file).
 
@@ -161,12 +163,10 @@ def from_environment() -> Comm:
     size = int(os.environ.get("WORLD_SIZE", "1"))
     if size <= 1:
         return SINGLE
-    import torch
     import torch.distributed as dist
 
     if not dist.is_initialized():
-        backend = "nccl" if torch.cuda.is_available() else "gloo"
-        dist.init_process_group(backend=backend)
+        dist.init_process_group(backend=os.environ.get("RETARGET_DIST_BACKEND", "gloo"))
     return Comm(
         rank=dist.get_rank(),
         size=dist.get_world_size(),
