@@ -72,8 +72,7 @@ class PPOConfig(PluginConfig):
     overlap: bool = Field(
         False,
         description="update on each rollout in a thread while the next is collected: more "
-        "steps/s, one update of policy lag (learned less per sample in the project's "
-        "measurement: retarget.learn.overlap)",
+        "steps/s, one update of policy lag under a decoupled objective (retarget.learn.overlap)",
     )
     episode_window: int = Field(100, gt=0, description="finished episodes averaged in stats")
     critic_warmup: int = Field(
@@ -142,7 +141,6 @@ class DaggerConfig(PluginConfig):
     overlap: bool = Field(
         False,
         description="update on each rollout in a thread while the next is collected: more "
-        "steps/s, one update of policy lag (learned less per sample in the project's "
-        "measurement: retarget.learn.overlap)",
+        "steps/s, one update of policy lag under a decoupled objective (retarget.learn.overlap)",
     )
     episode_window: int = Field(100, gt=0, description="finished episodes averaged in stats")

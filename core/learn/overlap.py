@@ -9,10 +9,12 @@ leaves idle: 1,470-1,500 instead of 1,300 env steps/s for the human on 2 cores.
 
 The price is one update of policy lag: the rollout collected during update ``k`` comes from
 the weights before it (a frozen acting copy), so update ``k+1`` starts one step away from the
-policy that collected its data, and PPO's importance ratio and clipping absorb that gap only
-in part: measured (``benchmarks/results/scale_2026-12-02.md``) it learns less per sample, and
-even per minute, than the sequential default. It is kept as an option for machines where the
-update is cheap next to the collection; on few cores two torchrun ranks are the faster way.
+policy that collected its data. Clipping the ratio around that stale behaviour policy, as
+plain PPO would, learned clearly less per sample (return 60 against 68 after 400 k steps);
+the update therefore uses the decoupled objective (``PPOLearner.update(proximal=True)``:
+clipped around the policy the update starts from, importance-weighted to the behaviour
+policy), which brought it to 65 (``benchmarks/results/scale_2026-12-02.md``). On few cores
+two torchrun ranks are still the faster way to a given return; this stays an option.
 
 Statistics stay exact: observation and return statistics of a rollout are merged after the
 concurrent update, and the update's minibatch order draws from its own generator, so a run
@@ -89,7 +91,7 @@ class OverlapState:
         def learn() -> None:
             try:
                 t = time.perf_counter()
-                result["stats"] = ppo.update(self.ready, self.generator)
+                result["stats"] = ppo.update(self.ready, self.generator, proximal=True)
                 result["seconds"] = time.perf_counter() - t
             except BaseException as exc:  # re-raised in the caller's thread
                 result["error"] = exc

@@ -290,10 +290,19 @@ class PPOLearner:
     # ------------------------------------------------------------------ update
 
     def update(
-        self, storage: RolloutStorage | None = None, generator: torch.Generator | None = None
+        self,
+        storage: RolloutStorage | None = None,
+        generator: torch.Generator | None = None,
+        proximal: bool = False,
     ) -> dict[str, float]:
         """The clipped PPO update on ``storage`` (default: the learner's last rollout),
-        minibatches drawn from ``generator`` (default: the learner's)."""
+        minibatches drawn from ``generator`` (default: the learner's).
+
+        ``proximal``: the rollout came from an older policy than the one updated (an
+        overlapped iteration), so the objective is decoupled (Hilton et al. 2022, "Batch
+        size-invariance for policy optimization"): the ratio is clipped around the policy this
+        update starts from, and each sample is weighted by that policy's probability over the
+        behaviour policy's, instead of clipping around the stale behaviour policy."""
         c = self.config
         st = storage if storage is not None else self.storage
         if c.normalize_advantages:
@@ -301,17 +310,26 @@ class PPOLearner:
             st.advantages.copy_((adv - adv.mean()) / (adv.std() + 1e-8))
         total = st.steps * st.num_envs
         count = max(1, round(total / c.minibatch_size))
+        extra = {}
+        if proximal:
+            with torch.no_grad():
+                obs = st.obs[self.actor_key].reshape(total, -1)
+                actions = st.actions.reshape(total, -1)
+                extra["prox"] = self.actor.log_prob(self.actor(obs), actions)
         sums = dict.fromkeys(("policy_loss", "value_loss", "approx_kl", "clip_fraction"), 0.0)
         grad_norm, n = 0.0, 0
         v_mean, v_std = self.value_norm.mean.float(), self.value_norm.var.sqrt().float()
         for _ in range(c.epochs):
-            for mb in st.minibatches(count, generator or self.generator):
+            for mb in st.minibatches(count, generator or self.generator, extra):
                 mean = self.actor(mb[f"obs/{self.actor_key}"])
                 log_prob = self.actor.log_prob(mean, mb["actions"])
-                log_ratio = log_prob - mb["log_probs"]
+                anchor = mb.get("prox", mb["log_probs"])
+                log_ratio = log_prob - anchor
                 ratio = log_ratio.exp()
                 adv = mb["advantages"]
                 surrogate = torch.min(ratio * adv, ratio.clamp(1 - c.clip, 1 + c.clip) * adv)
+                if "prox" in mb:  # importance of the proximal policy over the behaviour one
+                    surrogate = surrogate * (mb["prox"] - mb["log_probs"]).exp()
                 policy_loss = -surrogate.mean()
                 value, old, target = (
                     self.critic(mb[f"obs/{self.critic_key}"]),

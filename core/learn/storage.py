@@ -79,9 +79,13 @@ class RolloutStorage:
         torch.add(self.advantages, self.values, out=self.returns)
 
     def minibatches(
-        self, count: int, generator: torch.Generator | None
+        self,
+        count: int,
+        generator: torch.Generator | None,
+        extra: Mapping[str, torch.Tensor] | None = None,
     ) -> Iterator[dict[str, torch.Tensor]]:
-        """``count`` random disjoint minibatches covering every sample once (one epoch)."""
+        """``count`` random disjoint minibatches covering every sample once (one epoch);
+        ``extra``: more per-sample tensors ``(T * N, ...)`` sliced the same way."""
         total = self.steps * self.num_envs
         perm = torch.randperm(total, generator=generator)
         flat = {
@@ -91,6 +95,7 @@ class RolloutStorage:
             "advantages": self.advantages.reshape(total),
             "returns": self.returns.reshape(total),
             **{f"obs/{k}": v.reshape(total, -1) for k, v in self.obs.items()},
+            **(extra or {}),
         }
         for idx in perm.tensor_split(count):
             yield {k: v[idx] for k, v in flat.items()}
