@@ -60,3 +60,22 @@ def test_overlapped_runs_repeat_and_resume_bit_for_bit(tmp_path: Path) -> None:
     assert resumed.progress.iteration == straight.progress.iteration
     assert_state_equal(resumed.algorithm.state_dict(), straight.algorithm.state_dict(), "algorithm")
     assert_state_equal(resumed.env.state_dict(), straight.env.state_dict(), "env")
+
+
+def test_the_decoupled_objective_is_ppo_when_the_rollout_is_fresh(tmp_path: Path) -> None:
+    """Collected by the very weights being updated, the proximal and behaviour policies are
+    one: the decoupled update must then move the weights as the plain one does."""
+    import copy
+
+    t = _trainer(tmp_path, "fresh")
+    ppo = t.algorithm.learner
+    ppo.collect(t.env)
+    twin = copy.deepcopy(ppo)
+    before = copy.deepcopy(ppo.actor.state_dict())
+    st, twin_st = copy.deepcopy(ppo.storage), copy.deepcopy(ppo.storage)
+    ppo.update(st, torch.Generator().manual_seed(1), proximal=True)
+    twin.update(twin_st, torch.Generator().manual_seed(1))
+    after = ppo.actor.state_dict()
+    assert any(not torch.equal(before[k], after[k]) for k in after), "the update moved"
+    for name, tensor in after.items():
+        torch.testing.assert_close(tensor, twin.actor.state_dict()[name], atol=1e-5, rtol=1e-4)
