@@ -55,9 +55,6 @@ def import_warp() -> tuple[Any, Any]:
 class WarpSim(BatchedSim):
     """N worlds of one model on MuJoCo Warp (a GPU when there is one, else the CPU)."""
 
-    overflows: int = 0
-    """Control steps in which the contacts of all worlds overflowed their buffers."""
-
     def _open(self) -> None:
         wp, mjw = import_warp()
         self._wp, self._mjw = wp, mjw
@@ -74,6 +71,8 @@ class WarpSim(BatchedSim):
                 njmax=self.settings.warp_constraints,
             )
         self._graph = None
+        self.overflows = 0
+        """Control steps in which the contacts of all worlds overflowed their buffers."""
         self._ctrl = np.zeros((self.num_envs, self.model.nu))
         self._push("time", np.ones(self.num_envs))  # see BatchedSim: time never restarts
         self._pull()

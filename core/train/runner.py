@@ -106,7 +106,6 @@ class Trainer:
         self.checkpoint_every = checkpoint_every
         seed = resolved.recipe.seed + comm.rank  # each rank its own episodes and noise
         generator = seed_everything(seed)
-        self._rank_generator = torch.Generator().manual_seed(seed)
         if threads is None and comm.local_size > 1 and resolved.recipe.sim.threads == 0:
             threads = max(1, (os.cpu_count() or 1) // comm.local_size)  # share the cores
         self.env = env_from_recipe(
@@ -174,7 +173,8 @@ class Trainer:
             self.logger.drop_after(self.progress.iteration)
         if own is None:
             self.algorithm.load_state_dict(state["algorithm"])
-            self.algorithm.fresh_rank(self._rank_generator)
+            rank_seed = self.resolved.recipe.seed + rank
+            self.algorithm.fresh_rank(torch.Generator().manual_seed(rank_seed))
             return
         self.algorithm.load_state_dict(own["algorithm"])
         self.env.load_state_dict(own["env"])
