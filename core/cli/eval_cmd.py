@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from retarget.cli.numbers import amount, count
+from retarget.cli.recipe_args import add_pick_flags, patterns
 from retarget.cli.run_changes import add_run_change_args
 from retarget.errors import RetargetError
 from retarget.registry import Registry
@@ -53,7 +54,8 @@ def short_label(name: str, width: int = LABEL) -> str:
 def add_parser(sub: argparse._SubParsersAction) -> None:
     parser = sub.add_parser("eval", help="evaluate a trained run on motion clips")
     parser.add_argument("run", help="run directory (runs/NAME/latest)")
-    parser.add_argument("--motions", help="clip file or directory (default: the run's own)")
+    parser.add_argument("--motions", help="clip file, folder or archive (default: the run's own)")
+    add_pick_flags(parser)
     parser.add_argument(
         "--every", type=count(1, 10**6), default=30, help="start a run every K frames"
     )
@@ -131,6 +133,8 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             checkpoint=args.checkpoint,
             scene=args.scene,
             assignments=args.assignments,
+            include=patterns(args.include),
+            exclude=patterns(args.exclude),
         )
 
     truth = None
@@ -142,7 +146,8 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         motions = args.motions or truth_run.resolved.recipe.motions.path
         if motions is None:
             raise RetargetError("--estimator needs --motions: the clips both runs read")
-        source = load_run(args.estimator, registry, num_envs=1, motions=motions)
+        source = load_run(args.estimator, registry, num_envs=1, motions=motions,
+                          include=patterns(args.include), exclude=patterns(args.exclude))
         estimator = source.algorithm.pose_estimator()
         if estimator is None:
             raise RetargetError(f"--estimator {args.estimator} is not a pose estimator run")

@@ -23,9 +23,25 @@ def add_recipe_flags(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--observers", help="comma-separated observer plugin names")
     parser.add_argument("--scene", help="scene plugin name")
     parser.add_argument("--algorithm", help="algorithm plugin name")
-    parser.add_argument("--motions", help="motion file or directory")
+    parser.add_argument("--motions", help="motion file, directory or archive (.tar.gz, .zip)")
+    add_pick_flags(parser)
     parser.add_argument("--seed", help="random seed")
     add_set_flag(parser, "override any recipe field, e.g. --set rewards.action_diff.weight=0.2")
+
+
+def add_pick_flags(parser: argparse.ArgumentParser) -> None:
+    """``--include``/``--exclude``: comma-separated shell patterns on motion file names."""
+    parser.add_argument(
+        "--include", metavar="PATTERNS", help="only motion files matching these, e.g. '*_walk*'"
+    )
+    parser.add_argument(
+        "--exclude", metavar="PATTERNS", help="leave these motion files out, e.g. '*_normal_*'"
+    )
+
+
+def patterns(text: str | None) -> list[str] | None:
+    """``--include``/``--exclude`` as a list (None when the flag was not given)."""
+    return None if text is None else [p.strip() for p in text.split(",") if p.strip()]
 
 
 def add_set_flag(parser: argparse.ArgumentParser, help: str) -> None:
@@ -37,7 +53,8 @@ def add_set_flag(parser: argparse.ArgumentParser, help: str) -> None:
 
 def shorthands(args: argparse.Namespace) -> dict[str, str | None]:
     """The shorthand flags' values, keyed as :func:`retarget.recipe.load` expects them."""
-    keys = ("character", "sensors", "observers", "scene", "algorithm", "motions", "seed")
+    keys = ("character", "sensors", "observers", "scene", "algorithm", "motions", "include",
+            "exclude", "seed")
     return {key: getattr(args, key, None) for key in keys}
 
 

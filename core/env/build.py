@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from retarget.env.env import RetargetEnv
 from retarget.kinds import (
     Character,
@@ -47,6 +49,8 @@ def env_from_recipe(
     terminations: bool = True,
     registry: Registry | None = None,
     seed: int | None = None,
+    include: Sequence[str] | None = None,
+    exclude: Sequence[str] | None = None,
 ) -> RetargetEnv:
     """Instantiate every component of ``resolved``, load its motions and build the env.
 
@@ -54,7 +58,9 @@ def env_from_recipe(
     gives the clips themselves (already loaded or generated);
     ``terminations=False`` keeps only clip ends (evaluation follows runs through failures);
     ``registry`` is the invocation's plugins (motion formats come from it); ``seed``
-    replaces the recipe's (each rank of a distributed run has its own).
+    replaces the recipe's (each rank of a distributed run has its own); ``include`` and
+    ``exclude`` pick files by name (default: the recipe's own picks, which apply only to the
+    recipe's own path: a held-out set is named with the path that replaces it).
     """
     recipe = resolved.recipe
 
@@ -79,9 +85,12 @@ def env_from_recipe(
     if num_envs is not None:
         options = options.model_copy(update={"num_envs": num_envs})
     if clips is None:
+        own = motions is None
         clips = load_motions(
-            motions if motions is not None else recipe.motions.path,
+            recipe.motions.path if own else motions,
             motion_formats(resolved, registry),
+            include=include if include is not None else recipe.motions.include if own else (),
+            exclude=exclude if exclude is not None else recipe.motions.exclude if own else (),
         )
     sensors: list[Sensor] = made("sensor")
     observers: list[Observer] = made("observer")

@@ -17,6 +17,7 @@ import numpy as np
 import torch
 
 from retarget.character.kinematic import retarget_clip
+from retarget.env.reference_cache import load_reference, reference_key, store_reference
 from retarget.errors import PluginError
 from retarget.kinds import Character
 from retarget.kinds.state import Layout, SimState
@@ -57,57 +58,17 @@ class CharacterReference:
                 "has no joint map, so human motion cannot be retargeted onto it",
                 plugin=f"character {character.name}",
             )
-        qpos_parts, qvel_parts = [], []
-        for clip in clips:
-            motion = retarget_clip(clip, model, joint_map)
-            qpos_parts.append(motion.qpos)
-            qvel_parts.append(_velocities(model, motion.qpos, clip.fps))
-        qpos = np.concatenate(qpos_parts)
-        qvel = np.concatenate(qvel_parts)
-        frames = len(qpos)
-        bodies = np.asarray(layout.body_ids)
-        sites = np.asarray(layout.site_ids)
-        arrays = {
-            "body_pos": np.zeros((frames, len(bodies), 3)),
-            "body_quat": np.zeros((frames, len(bodies), 4)),
-            "body_linvel": np.zeros((frames, len(bodies), 3)),
-            "body_angvel": np.zeros((frames, len(bodies), 3)),
-            "site_pos": np.zeros((frames, len(sites), 3)),
-            "site_quat": np.zeros((frames, len(sites), 4)),
-        }
-        data = mujoco.MjData(model)
-        roots = model.body_rootid[bodies]
-        cvel = np.zeros((frames, len(bodies), 6))
-        com = np.zeros((frames, len(bodies), 3))
-        for f in range(frames):  # preprocessing: forward kinematics of every library frame
-            data.qpos[:] = qpos[f]
-            data.qvel[:] = qvel[f]
-            mujoco.mj_kinematics(model, data)
-            mujoco.mj_comPos(model, data)
-            mujoco.mj_comVel(model, data)
-            arrays["body_pos"][f] = data.xpos[bodies]
-            arrays["body_quat"][f] = data.xquat[bodies]
-            cvel[f] = data.cvel[bodies]
-            com[f] = data.subtree_com[roots]
-            arrays["site_pos"][f] = data.site_xpos[sites]
-            for k, s in enumerate(sites):
-                mujoco.mju_mat2Quat(arrays["site_quat"][f, k], data.site_xmat[s])
-        ang, lin = body_velocities(cvel, arrays["body_pos"], com)
-        # which body groups touch the (un-randomized) scene, per frame: the contact reward's
-        # and the evaluation's labels
-        if mocap is None or all(m is None for m in mocap):
-            labels = scene_contact_labels(model, layout, qpos, contact_margin)
-        else:
-            bounds = np.cumsum([0] + [len(p) for p in qpos_parts])
-            labels = np.concatenate([
-                scene_contact_labels(model, layout, qpos[a:b], contact_margin, mocap[c])
-                for c, (a, b) in enumerate(itertools.pairwise(bounds))
-            ])  # fmt: skip
+        key = reference_key(model, joint_map, clips, contact_margin, mocap)
+        cached = load_reference(key)
+        if cached is None:
+            cached = _compute(model, layout, joint_map, clips, contact_margin, mocap)
+            store_reference(key, cached)
+        qpos, qvel, labels = cached.pop("qpos"), cached.pop("qvel"), cached.pop("labels")
+        arrays = cached
         self.scene_contacts = torch.as_tensor(labels, dtype=torch.bool)
         # the character's block only: joints of articulated scene props follow it and keep
         # their defaults at resets
         qpos, qvel = qpos[:, : layout.nq], qvel[:, : layout.nv]
-        arrays["body_angvel"], arrays["body_linvel"] = ang, lin
         f32 = torch.float32
         self.qpos = torch.as_tensor(qpos, dtype=f32)
         self.qvel = torch.as_tensor(qvel, dtype=f32)
@@ -134,3 +95,62 @@ class CharacterReference:
             contact_force=torch.zeros(rows.shape[0], a["body_pos"].shape[1]),
             contact_force_up=torch.zeros(rows.shape[0], a["body_pos"].shape[1]),
         )
+
+
+def _compute(
+    model: mujoco.MjModel,
+    layout: Layout,
+    joint_map,
+    clips: Sequence[MotionClip],
+    contact_margin: float,
+    mocap: Sequence[tuple[np.ndarray, np.ndarray] | None] | None,
+) -> dict[str, np.ndarray]:
+    """Retargeting, velocities, forward kinematics and contact labels of every frame."""
+    qpos_parts, qvel_parts = [], []
+    for clip in clips:
+        motion = retarget_clip(clip, model, joint_map)
+        qpos_parts.append(motion.qpos)
+        qvel_parts.append(_velocities(model, motion.qpos, clip.fps))
+    qpos = np.concatenate(qpos_parts)
+    qvel = np.concatenate(qvel_parts)
+    frames = len(qpos)
+    bodies = np.asarray(layout.body_ids)
+    sites = np.asarray(layout.site_ids)
+    arrays = {
+        "body_pos": np.zeros((frames, len(bodies), 3)),
+        "body_quat": np.zeros((frames, len(bodies), 4)),
+        "body_linvel": np.zeros((frames, len(bodies), 3)),
+        "body_angvel": np.zeros((frames, len(bodies), 3)),
+        "site_pos": np.zeros((frames, len(sites), 3)),
+        "site_quat": np.zeros((frames, len(sites), 4)),
+    }
+    data = mujoco.MjData(model)
+    roots = model.body_rootid[bodies]
+    cvel = np.zeros((frames, len(bodies), 6))
+    com = np.zeros((frames, len(bodies), 3))
+    for f in range(frames):  # preprocessing: forward kinematics of every library frame
+        data.qpos[:] = qpos[f]
+        data.qvel[:] = qvel[f]
+        mujoco.mj_kinematics(model, data)
+        mujoco.mj_comPos(model, data)
+        mujoco.mj_comVel(model, data)
+        arrays["body_pos"][f] = data.xpos[bodies]
+        arrays["body_quat"][f] = data.xquat[bodies]
+        cvel[f] = data.cvel[bodies]
+        com[f] = data.subtree_com[roots]
+        arrays["site_pos"][f] = data.site_xpos[sites]
+        for k, s in enumerate(sites):
+            mujoco.mju_mat2Quat(arrays["site_quat"][f, k], data.site_xmat[s])
+    # which body groups touch the (un-randomized) scene, per frame: the contact reward's
+    # and the evaluation's labels
+    if mocap is None or all(m is None for m in mocap):
+        labels = scene_contact_labels(model, layout, qpos, contact_margin)
+    else:
+        bounds = np.cumsum([0] + [len(p) for p in qpos_parts])
+        labels = np.concatenate([
+            scene_contact_labels(model, layout, qpos[a:b], contact_margin, mocap[c])
+            for c, (a, b) in enumerate(itertools.pairwise(bounds))
+        ])  # fmt: skip
+    ang, lin = body_velocities(cvel, arrays["body_pos"], com)
+    arrays["body_angvel"], arrays["body_linvel"] = ang, lin
+    return {"qpos": qpos, "qvel": qvel, "labels": labels, **arrays}

@@ -23,6 +23,9 @@ class MotionFormat(Plugin):
 
     kind: ClassVar[str] = "motion_format"
     suffixes: ClassVar[tuple[str, ...]] = ()
+    cacheable: ClassVar[bool] = False
+    """True when a read clip depends only on the file's bytes and this reader's config (no
+    file beside it, no body model): parsed clips are then cached on disk by content."""
 
     @abstractmethod
     def read(self, path: Path) -> MotionClip: ...

@@ -2,19 +2,25 @@
 
 Real datasets are never shipped with the project (licences, size): users point at them with
 ``--motions DIR``, a recipe field, or the ``RETARGET_DATA`` environment variable (a directory
-holding motion files, searched recursively). With none of these, the generated default set
-(:mod:`retarget.motion.procedural`) is used.
+holding motion files, searched recursively, or an archive of them; archives inside the
+directory are read too, see :mod:`retarget.motion.archives`). With none of these, the
+generated default set (:mod:`retarget.motion.procedural`) is used. ``include``/``exclude``
+name patterns pick files (hold out a whole style: ``exclude: ["*_normal_*"]``), and parsed
+clips are cached by content (:mod:`retarget.motion.clip_cache`).
 """
 
 from __future__ import annotations
 
+import fnmatch
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
 from retarget.errors import MotionError
 from retarget.kinds import MotionFormat
+from retarget.motion.archives import is_archive, unpacked
 from retarget.motion.clip import MotionClip
+from retarget.motion.clip_cache import clip_cache_dir, read_cached
 
 ENV_VAR = "RETARGET_DATA"
 
@@ -35,11 +41,19 @@ def resolve_motion_source(
         path, origin = env, f"${ENV_VAR}"
     p = Path(path).expanduser()
     wanted = tuple(s.lower() for s in suffixes)
-    if p.is_file():
+    if p.is_file() and not is_archive(p):
         return [p]
     if not p.exists():
         raise MotionError(f"motion path does not exist ({origin})", file=p)
-    files = sorted(f for f in _walk(p) if f.suffix.lower() in wanted)
+    found = [p] if p.is_file() else _walk(p)
+    files: list[Path] = []
+    for f in found:
+        if f.suffix.lower() in wanted:
+            files.append(f)
+        elif is_archive(f):
+            inside = unpacked(f, wanted)
+            files.extend(g for g in _walk(inside) if g.suffix.lower() in wanted)
+    files = sorted(files)
     if not files:
         raise MotionError(
             f"no motion files ({', '.join(wanted)}) under this directory ({origin})", file=p
@@ -78,13 +92,28 @@ def reader_for(path: Path, formats: Mapping[str, MotionFormat]) -> MotionFormat:
     )
 
 
+def select(files: Sequence[Path], include: Sequence[str] = (),
+           exclude: Sequence[str] = ()) -> list[Path]:  # fmt: skip
+    """``files`` whose name matches one of ``include`` (all when empty) and none of
+    ``exclude`` (shell patterns on the file name, case-insensitive)."""
+
+    def hit(f: Path, patterns: Sequence[str]) -> bool:
+        return any(fnmatch.fnmatch(f.name.lower(), p.lower()) for p in patterns)
+
+    return [f for f in files if (not include or hit(f, include)) and not hit(f, exclude)]
+
+
 def load_motions(
     path: str | Path | None = None,
     formats: Mapping[str, MotionFormat] | None = None,
     *,
     height: float | None = None,
+    include: Sequence[str] = (),
+    exclude: Sequence[str] = (),
+    progress: bool = True,
 ) -> list[MotionClip]:
-    """Clips from ``path`` / ``$RETARGET_DATA``, or the generated default set."""
+    """Clips from ``path`` / ``$RETARGET_DATA`` (only the files ``include``/``exclude``
+    select), or the generated default set; a progress bar while many files are parsed."""
     if formats is None:
         formats = default_formats()
     suffixes = [s for f in formats.values() for s in f.suffixes]
@@ -93,7 +122,32 @@ def load_motions(
         from retarget.motion.procedural import default_motions
 
         return default_motions() if height is None else default_motions(height)
-    return [reader_for(f, formats).read(f) for f in files]
+    chosen = select(files, include, exclude)
+    if not chosen:
+        raise MotionError(
+            f"none of {len(files)} motion files matches include={list(include)} "
+            f"exclude={list(exclude)}", file=Path(str(path or os.environ.get(ENV_VAR, ""))),
+        )  # fmt: skip
+    folder = clip_cache_dir()
+    if len(chosen) < 50 or not progress:
+        return [read_cached(reader_for(f, formats), f, folder) for f in chosen]
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeRemainingColumn,
+    )
+
+    columns = (TextColumn("[bold]motion files"), BarColumn(), MofNCompleteColumn(),
+               TimeRemainingColumn())  # fmt: skip
+    clips = []
+    with Progress(*columns, transient=True) as bar:
+        task = bar.add_task("read", total=len(chosen))
+        for f in chosen:
+            clips.append(read_cached(reader_for(f, formats), f, folder))
+            bar.advance(task)
+    return clips
 
 
 def default_formats() -> dict[str, MotionFormat]:

@@ -8,7 +8,7 @@ plugin's own ``Config`` in phase 2 (:mod:`retarget.recipe.resolve`).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -47,6 +47,15 @@ class MotionsSection(Strict):
     )
     format: ComponentRef | None = Field(
         None, description="motion format plugin; chosen by file suffix when unset"
+    )
+    include: list[Annotated[str, Field(min_length=1, max_length=200)]] = Field(
+        default_factory=list, max_length=100,
+        description="only files whose name matches one of these shell patterns (all if empty)",
+    )
+    exclude: list[Annotated[str, Field(min_length=1, max_length=200)]] = Field(
+        default_factory=list, max_length=100,
+        description="leave out files whose name matches one of these patterns (a held-out "
+        "style: ['*_normal_*'])",
     )
 
 

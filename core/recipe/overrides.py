@@ -24,10 +24,13 @@ SHORTHANDS: dict[str, str] = {
     "observers": "observers",
     "algorithm": "algorithm",
     "motions": "motions.path",
+    "include": "motions.include",
+    "exclude": "motions.exclude",
     "seed": "seed",
     "name": "name",
 }
-"""CLI flag -> recipe path it sets. ``sensors``/``observers`` take comma-separated lists."""
+"""CLI flag -> recipe path it sets. ``sensors``/``observers``/``include``/``exclude`` take
+comma-separated lists."""
 
 
 def parse_assignment(text: str) -> tuple[str, Any]:
@@ -108,7 +111,7 @@ def apply_overrides(
             continue
         path = SHORTHANDS[flag]
         parsed: Any = value
-        if flag in {"sensors", "observers"}:
+        if flag in {"sensors", "observers", "include", "exclude"}:
             parsed = [part.strip() for part in str(value).split(",") if part.strip()]
         elif flag == "seed":
             parsed = _int(value, flag)

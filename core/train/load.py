@@ -85,6 +85,8 @@ def load_run(
     checkpoint: str | Path | None = None,
     scene: str | None = None,
     assignments: Sequence[str] = (),
+    include: Sequence[str] | None = None,
+    exclude: Sequence[str] | None = None,
 ) -> LoadedRun:
     """A trained run ready to act: env built from its recipe (optionally on other motions, or
     with ``scene``/``assignments`` changing the recipe; see :func:`locked_recipe`)."""
@@ -101,6 +103,8 @@ def load_run(
         clips=clips,
         terminations=terminations,
         registry=registry,
+        include=include,
+        exclude=exclude,
     )
     algorithm = resolved.component("algorithm").instantiate()
     assert isinstance(algorithm, Algorithm)

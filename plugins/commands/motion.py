@@ -14,6 +14,7 @@ from retarget.errors import require_extra
 
 if TYPE_CHECKING:
     from retarget.motion.clip import MotionClip
+    from retarget.registry import Registry
 
 
 def _add_format_args(parser: argparse.ArgumentParser) -> None:
@@ -25,8 +26,8 @@ def _add_format_args(parser: argparse.ArgumentParser) -> None:
                         help="position-only files: the capture's frame rate")  # fmt: skip
 
 
-def _formats(args: argparse.Namespace) -> dict:
-    registry = getattr(args, "registry", None)
+def _formats(args: argparse.Namespace, registry: Registry | None) -> dict:
+    """The readers the flags ask for, from the invocation's registry (never reloaded)."""
     chosen = getattr(args, "motion_format", None)
     joints, fps = getattr(args, "joints", None), getattr(args, "source_fps", None)
     if chosen is None and (joints is not None or fps is not None):
@@ -46,13 +47,14 @@ def _formats(args: argparse.Namespace) -> dict:
     return {n: registry.get("motion_format", n).cls() for n in registry.names("motion_format")}
 
 
-def _read(path: str, args: argparse.Namespace) -> MotionClip:
+def _read(path: str, formats: dict) -> MotionClip:
+    from retarget.motion.clip_cache import clip_cache_dir, read_cached
     from retarget.motion.sources import reader_for
 
     p = Path(path)
     if not p.is_file():
         raise MotionError("no such file", file=p)
-    return reader_for(p, _formats(args)).read(p)
+    return read_cached(reader_for(p, formats), p, clip_cache_dir())
 
 
 class MotionCommand(Command):
@@ -124,6 +126,7 @@ class MotionCommand(Command):
         )
 
     def run(self, args: argparse.Namespace) -> int:
+        self.formats = _formats(args, getattr(self, "registry", None))
         if args.motion_action == "inspect":
             return self._inspect(args)
         if args.motion_action == "generate":
@@ -163,7 +166,7 @@ class MotionCommand(Command):
         out = Path(args.out)
         if out.suffix.lower() != ".jsonl":
             raise RetargetError(f"--out must end in .jsonl, got '{out.name}'")
-        clip = _read(args.file, args)
+        clip = _read(args.file, self.formats)
         poses = device_poses(clip.global_pos, clip.global_rot, clip.height)
         times = np.arange(clip.num_frames) / clip.fps
         frames = None
@@ -203,8 +206,19 @@ class MotionCommand(Command):
             "up",
         ):
             table.add_column(col, justify="left" if col in ("file", "skeleton") else "right")
-        for f in args.files:
-            clip = _read(f, args)
+        from retarget.motion.archives import is_archive
+        from retarget.motion.sources import resolve_motion_source
+
+        suffixes = [x for fmt in self.formats.values() for x in fmt.suffixes]
+        files: list[str | Path] = []
+        for given in args.files:  # folders and archives stand for the motion files they hold
+            p = Path(given)
+            many = p.is_dir() or is_archive(p)
+            files.extend(resolve_motion_source(p, suffixes) or [] if many else [given])
+        seconds = 0.0
+        for f in files:
+            clip = _read(str(f), self.formats)
+            seconds += clip.duration
             c = clip.contacts
             table.add_row(
                 Path(f).name,
@@ -219,7 +233,10 @@ class MotionCommand(Command):
                 str(clip.meta.get("up", "-")),
             )
         # full names and numbers even when piped (rich would squeeze the table to 80 columns)
-        Console(soft_wrap=True, width=None if sys.stdout.isatty() else 200).print(table)
+        console = Console(soft_wrap=True, width=None if sys.stdout.isatty() else 200)
+        console.print(table)
+        if len(files) > 1:
+            console.print(f"{len(files)} clips, {seconds / 3600:.2f} hours")
         return 0
 
     def _show(self, args: argparse.Namespace) -> int:
@@ -233,7 +250,7 @@ class MotionCommand(Command):
             raise RetargetError(f"--out must end in .png or .mp4, got '{out.name}'")
         if suffix == ".mp4":  # named before any clip is read or rendered
             require_extra("video", "imageio_ffmpeg", needed_for="writing .mp4")
-        clip = _read(args.file, args)
+        clip = _read(args.file, self.formats)
         first = int(np.clip(round(args.start * clip.fps), 0, clip.num_frames - 1))
         last = (
             clip.num_frames - 1

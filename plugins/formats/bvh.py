@@ -38,6 +38,7 @@ class Bvh(MotionFormat):
     name = "bvh"
     Config = BvhConfig
     suffixes = (".bvh",)
+    cacheable = True
 
     def read(self, path: Path) -> MotionClip:
         from retarget.motion.import_bvh import load_bvh
