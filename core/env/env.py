@@ -32,11 +32,13 @@ import numpy as np
 import torch
 
 from retarget.character.kinematic import root_height_ratio, scaled_clip
+from retarget.env.curriculum import FailureCurriculum
 from retarget.env.managers import RewardManager, TerminationManager
 from retarget.env.observation_manager import ObservationManager, PluginSource
 from retarget.env.observations import Privileged, Proprio
 from retarget.env.options import EnvOptions
 from retarget.env.reference import CharacterReference
+from retarget.env.root_assist import RootAssist
 from retarget.errors import PluginError
 from retarget.kinds import Character, Observer, RewardTerm, Scene, Sensor, Termination
 from retarget.kinds.state import ReferenceBatch, StepContext
@@ -117,6 +119,14 @@ class RetargetEnv:
             *(t.needs() for t in self.terminations.terms.values()),
         )
         self.action_dim = layout.nu
+        self.curriculum = (FailureCurriculum(self.library, opts.curriculum, n)
+                           if opts.curriculum is not None else None)  # fmt: skip
+        self.root_assist = None
+        if opts.root_assist is not None:
+            root = layout.body_ids[0]
+            mass = float(self.world.model.body_subtreemass[root])
+            height = 1.9 * float(np.median(self.reference.qpos64[:, 2]))
+            self.root_assist = RootAssist(opts.root_assist, mass, height)
         self.generator = torch.Generator().manual_seed(seed)
         self.clip = torch.zeros(n, dtype=torch.long)
         self.frame = torch.zeros(n, dtype=torch.long)
@@ -254,7 +264,8 @@ class RetargetEnv:
         if env_ids.numel() == 0:
             return
         if clip is None or frame is None:
-            clip, frame = self.library.sample(int(env_ids.numel()), self.generator, margin=2)
+            sampler = self.curriculum or self.library
+            clip, frame = sampler.sample(int(env_ids.numel()), self.generator, margin=2)
         self.clip[env_ids], self.frame[env_ids] = clip, frame
         rows = self.library.rows(clip, frame)[:, 0].numpy()
         qpos = self.reference.qpos64[rows].copy()
@@ -315,6 +326,8 @@ class RetargetEnv:
         broken = ~torch.isfinite(action).all(dim=-1)  # a policy that output NaN/inf
         action = torch.nan_to_num(action, 0.0, 0.0, 0.0).clamp(-1.0, 1.0)
         self.total_steps += self.num_envs
+        if self.root_assist is not None:
+            self._assist()
         bad = torch.from_numpy(self.sim.step(action)) | broken
         sec, t0 = self.seconds, time.perf_counter()
         self.frame, clip_end = self.library.advance(self.clip, self.frame)
@@ -324,6 +337,8 @@ class RetargetEnv:
         failed, timed_out = self.terminations.check(ctx)
         failed |= bad
         timed_out = (timed_out | clip_end) & ~failed
+        if self.curriculum is not None:
+            self.curriculum.record(self.clip, self.frame, failed)
         t2 = time.perf_counter()
         # rewards come after terminations, so a term paid on failure is an ordinary term
         ctx = replace(ctx, terminated=failed)
@@ -360,6 +375,22 @@ class RetargetEnv:
         sec["rewards"] += t4 - t3  # failure penalties
         return obs, reward, failed, timed_out, info
 
+    def _assist(self) -> None:
+        """The root wrench toward the next reference frame for this control step (zero while
+        no trainer has set a scale: every evaluation)."""
+        assert self.root_assist is not None
+        if self.root_assist.scale <= 0.0:
+            self.sim.set_root_wrench(None)
+            return
+        rows = self.library.rows(self.clip, self.frame, (1,))[:, 0]
+        ref, sim, a = self.reference.arrays, self.sim.state, self.root_assist
+        wrench = a.wrench(
+            sim.body_pos[:, 0], sim.body_quat[:, 0], sim.body_linvel[:, 0],
+            sim.body_angvel[:, 0], ref["body_pos"][rows, 0], ref["body_quat"][rows, 0],
+            ref["body_linvel"][rows, 0], ref["body_angvel"][rows, 0],
+        )  # fmt: skip
+        self.sim.set_root_wrench(wrench.double().numpy())
+
     def state_dict(self) -> dict:
         """Everything needed to continue stepping exactly where this env is (checkpoints)."""
         return {
@@ -372,7 +403,9 @@ class RetargetEnv:
             "reward_sums": self.rewards.episode_sums.clone(),
             "generator": self.generator.get_state(),
             "nan_resets": self.nan_resets,
+            "nan_actions": self.nan_actions,
             "total_steps": self.total_steps,
+            "curriculum": self.curriculum.state_dict() if self.curriculum is not None else {},
             "scene": self.scene.state_dict() if self.scene is not None else {},
         }
 
@@ -390,7 +423,10 @@ class RetargetEnv:
         self.rewards.episode_sums = state["reward_sums"].clone()
         self.generator.set_state(state["generator"])
         self.nan_resets = int(state["nan_resets"])
+        self.nan_actions = int(state.get("nan_actions", 0))
         self.total_steps = int(state["total_steps"])
+        if state.get("curriculum") and self.curriculum is not None:
+            self.curriculum.load_state_dict(state["curriculum"])
         if state.get("scene") and self.scene is not None:
             self.scene.load_state_dict(state["scene"])
         return self.observe(self._context(self.prev_action))

@@ -6,6 +6,9 @@ from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from retarget.env.curriculum import CurriculumOptions
+from retarget.env.root_assist import RootAssistOptions
+
 
 class EnvOptions(BaseModel):
     """Environment settings that are not plugins (plugins configure the rest)."""
@@ -26,4 +29,14 @@ class EnvOptions(BaseModel):
         description="observation groups: name -> sources (sensor/observer names, 'proprio', "
         "'privileged'); default actor = sensors + proprio + observers, critic = actor + "
         "privileged",
+    )
+    curriculum: CurriculumOptions | None = Field(
+        None,
+        description="start episodes where recent failures happened, with a uniform share "
+        "(null: frame-uniform starts); e.g. {uniform: 0.5, bin_seconds: 2}",
+    )
+    root_assist: RootAssistOptions | None = Field(
+        None,
+        description="training only: a root force/torque toward the reference, annealed to "
+        "zero over anneal_steps (null: none); e.g. {strength: 1, anneal_steps: 3000000}",
     )

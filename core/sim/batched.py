@@ -150,6 +150,15 @@ class BatchedSim:
         self.seconds["gather"] += time.perf_counter() - t1
         return bad
 
+    def set_root_wrench(self, wrench: np.ndarray | None) -> None:
+        """World force and torque ``(N, 6)`` on the character's root body for the coming
+        steps (held over their substeps); None removes it."""
+        if not hasattr(self, "_xfrc"):
+            if wrench is None:
+                return
+            self._xfrc = self.batch.bind("xfrc_applied")
+        self._xfrc[:, self._bodies[0]] = 0.0 if wrench is None else wrench
+
     def reset(
         self,
         env_ids: np.ndarray,

@@ -107,6 +107,16 @@ class WarpSim(BatchedSim):
             wp.capture_launch(self._graph)
             wp.synchronize()
 
+    def set_root_wrench(self, wrench: np.ndarray | None) -> None:
+        """As :meth:`BatchedSim.set_root_wrench`, written to the device's ``xfrc_applied``."""
+        if wrench is None and not getattr(self, "_xfrc_set", False):
+            return
+        full = np.zeros((self.num_envs, self.model.nbody, 6))
+        if wrench is not None:
+            full[:, self._bodies[0]] = wrench
+        self._push("xfrc_applied", full)
+        self._xfrc_set = wrench is not None
+
     def _forward(self) -> None:
         with self._wp.ScopedDevice(self.device):
             self._mjw.forward(self.warp_model, self.data)

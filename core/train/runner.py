@@ -227,8 +227,15 @@ class Trainer:
             while not self.comm.any(budget.done(self.progress.env_steps, self.progress.elapsed)):
                 before = self.env.total_steps
                 ends_before = self.env.termination_counts
+                assist = self.env.root_assist
+                if assist is not None:  # training alone gets the annealed root assist
+                    assist.scale = assist.options.scale_at(self.progress.env_steps)
                 stats = self.algorithm.train_iteration(self.env)
                 self._check_finite(stats)
+                if assist is not None:
+                    stats["root_assist"] = assist.scale
+                if self.env.curriculum is not None:
+                    stats["curriculum_hard_share"] = self.env.curriculum.hard_share()
                 stats.update(self._termination_shares(ends_before))
                 p = self.progress
                 p.iteration += 1
