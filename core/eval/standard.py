@@ -8,6 +8,7 @@ from collections.abc import Mapping
 import numpy as np
 import torch
 
+from retarget.eval.phc import PhcProtocol
 from retarget.eval.prop_hits import foot_geoms, foot_prop_hits, prop_geoms
 from retarget.eval.terms import Column, EvalBatch, EvalStep, MetricTerm
 from retarget.kinds import Termination
@@ -220,6 +221,7 @@ def standard_terms(
         Success(),
         HeadSuccess(head_distance),
         Falls(fall),
+        PhcProtocol(),
     ]
     props = prop_geoms(env.world.model)
     if props.any() and stepped:

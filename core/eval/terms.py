@@ -90,6 +90,8 @@ def summarise(
         if col.reduce == "rate":
             total = per_run[col.per][mask].sum()
             value = values.sum() / max(total, 1e-9) * col.factor
+        elif not np.isfinite(values).any():  # e.g. errors over successful runs, none was
+            value = np.nan
         elif col.reduce == "max":
             value = np.nanmax(values)
         else:

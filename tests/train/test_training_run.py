@@ -84,6 +84,14 @@ def test_cli_run_has_finite_losses_checkpoints_and_eval_and_play(
     assert overall["runs"] >= 1
     assert 0.0 <= overall["success_frame"] <= 1.0
     assert math.isfinite(overall["headset_cm"])
+    assert 0.0 <= overall["phc_success"] <= 1.0 and overall["phc_g_mpjpe_mm"] > 0
+
+    # PHC's protocol: one run per clip, first frame to last
+    rc = main(["eval", str(run), "--protocol", "phc", "--num-envs", "4", "--json", str(report)])
+    assert rc == 0
+    phc = json.loads(report.read_text())
+    assert phc["overall"]["runs"] == len(phc["clips"])
+    assert all(clip["runs"] == 1 for clip in phc["clips"].values())
 
     video = tmp_path / "play.gif"
     rc = main(["play", str(run), "--out", str(video), "--seconds", "0.3", "--size", "96x72"])
