@@ -142,6 +142,15 @@ def table(report: dict) -> Table:
     return t
 
 
+def _default_report(run_dir: Path, given: str) -> Path:
+    """``RUN/eval.json``; a shipped model's report goes to the working folder instead."""
+    from retarget.pretrained import inside_models
+
+    if inside_models(run_dir):
+        return Path(f"eval-{run_dir.name}.json")
+    return run_dir / "eval.json"
+
+
 def run(args: argparse.Namespace, registry: Registry) -> int:
     from rich.progress import (
         BarColumn,
@@ -222,7 +231,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     report["checkpoint"] = str(loaded.checkpoint)
     report["motions"] = args.motions or loaded.resolved.recipe.motions.path or "(generated)"
     report["settings"] = vars(settings)
-    path = Path(args.json_out) if args.json_out else loaded.run / "eval.json"
+    path = Path(args.json_out) if args.json_out else _default_report(loaded.run, args.run)
     path.write_text(json.dumps(report, indent=2))
     if report.get("interrupted"):
         out.print(f"interrupted: {len(report['clips'])} clips finished, written to {path}")

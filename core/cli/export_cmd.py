@@ -69,7 +69,10 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         "actuation": describe_actuation(env.sim.model, env.sim.settings.actuation),
     }
     metadata = {"run": str(loaded.run), "checkpoint": str(loaded.checkpoint), **metadata}
-    path = Path(args.out) if args.out else loaded.run / "export" / "policy.onnx"
+    from retarget.pretrained import inside_models
+
+    base = Path("export") / loaded.run.name if inside_models(loaded.run) else loaded.run / "export"
+    path = Path(args.out) if args.out else base / "policy.onnx"
     stages = _export_stages(env, path.parent)
     if stages:
         metadata["stages"] = stages  # networks inside sensors, run before the policy

@@ -21,6 +21,7 @@ from retarget.cli import (
     export_cmd,
     play_cmd,
     plugins_cmd,
+    pretrained_cmd,
     recipe_cmd,
     serve_cmd,
     stream_cmd,
@@ -74,6 +75,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="verb", metavar="COMMAND", parser_class=_Parser)
     plugins_cmd.add_parser(sub)
+    pretrained_cmd.add_parser(sub)
     recipe_cmd.add_parser(sub)
     train_cmd.add_parser(sub)
     eval_cmd.add_parser(sub)

@@ -242,6 +242,10 @@ class DaggerLearner:
 
     def load_state_dict(self, state: Mapping[str, Any]) -> None:
         self.actor.load_state_dict(state["actor"])
+        if "optimizer" not in state:  # a policy-only checkpoint (pretrained): acting only
+            self.obs_norm.load_state_dict(state["obs_norm"])
+            self.last_obs = None
+            return
         self.obs_norm.load_state_dict(state["obs_norm"])
         self.optimizer.load_state_dict(state["optimizer"])
         self.generator.set_state(state["generator"])

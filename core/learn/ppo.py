@@ -417,6 +417,13 @@ class PPOLearner:
 
     def load_state_dict(self, state: Mapping[str, Any]) -> None:
         self.actor.load_state_dict(state["actor"])
+        if "optimizer" not in state:  # a policy-only checkpoint (pretrained): acting only
+            self.obs_norm.load_state_dict(state["obs_norm"])
+            if "critic" in state:
+                self.critic.load_state_dict(state["critic"])
+                self.value_norm.load_state_dict(state["value_norm"])
+            self.last_obs = None
+            return
         self.critic.load_state_dict(state["critic"])
         self.obs_norm.load_state_dict(state["obs_norm"])
         self.value_norm.load_state_dict(state["value_norm"])

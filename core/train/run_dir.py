@@ -75,8 +75,11 @@ def starting_run(root: str | Path, name: str) -> Iterator[Path]:
 
 
 def resolve_run(path: str | Path) -> Path:
-    """A run directory from ``runs/NAME/latest``, ``runs/NAME/TIMESTAMP`` or ``runs/NAME``."""
-    p = Path(path)
+    """A run directory from ``runs/NAME/latest``, ``runs/NAME/TIMESTAMP``, ``runs/NAME`` or
+    ``pretrained:NAME`` (a model shipped in the package, :mod:`retarget.pretrained`)."""
+    from retarget import pretrained
+
+    p = pretrained.resolve(path)
     if (p / "latest").exists() and not (p / LOCK).exists():
         p = p / "latest"
     p = p.resolve()

@@ -128,7 +128,9 @@ class Dagger(Algorithm):
         env["groups"] = groups
         recipe["env"] = env
         algorithm = dict(recipe["algorithm"])
-        algorithm["teacher"] = str(run)  # the directory itself, not a moving 'latest' link
+        # the directory itself, not a moving 'latest' link (a shipped model keeps its name)
+        shipped = str(c.teacher).startswith("pretrained:")
+        algorithm["teacher"] = str(c.teacher) if shipped else str(run)
         if not algorithm.get("teacher_checkpoint"):  # the weights of now, if it trains on
             algorithm["teacher_checkpoint"] = str(latest_checkpoint(run).relative_to(run))
         recipe["algorithm"] = algorithm

@@ -1,0 +1,125 @@
+"""Pretrained models: a trained run packaged as a shipped model (lock, policy-only checkpoint,
+card) works as ``pretrained:NAME`` in eval, play, export and as a DAgger teacher, writes its
+outputs outside the package; and every model the package ships loads and acts."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import torch
+from helpers import REPO, TINY_TEACHER
+
+import retarget.pretrained as pretrained
+from retarget.cli.main import main
+from retarget.errors import RetargetError
+from retarget.pretrained import ModelCard
+from retarget.pretrained.package import package
+from retarget.registry.loader import load_plugins
+from retarget.train.load import load_run
+
+SHIPPED = pretrained.names()
+
+
+def _card(name: str, **changes) -> ModelCard:
+    fields = dict(name=name, summary="a tiny teacher", character="human",
+                  sensors=["full_body", "reference_action"], algorithm="ppo",
+                  data="the generated default clips", licence="none (generated data)",
+                  env_steps=64, cpu_hours=0.001)  # fmt: skip
+    return ModelCard(**{**fields, **changes})
+
+
+@pytest.fixture(scope="module")
+def models(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A tiny teacher trained for real, then packaged into a models folder of its own."""
+    import os
+
+    root = tmp_path_factory.mktemp("pretrained")
+    here = os.getcwd()
+    os.chdir(root)
+    try:
+        (root / "teacher.yaml").write_text(TINY_TEACHER)
+        assert main(["train", "teacher.yaml", "--steps", "64", "--no-tensorboard"]) == 0
+        models = root / "models"
+        package(root / "runs" / "teacher" / "latest", _card("tiny-teacher"), models=models)
+    finally:
+        os.chdir(here)
+    return models
+
+
+@pytest.fixture
+def shipped(models: Path, monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Path:
+    monkeypatch.setattr(pretrained, "MODELS", models)
+    monkeypatch.chdir(tmp_path)
+    return models
+
+
+def test_a_packaged_run_is_small_and_listed(shipped: Path, capsys) -> None:
+    folder = shipped / "tiny-teacher"
+    names = sorted(p.name for p in folder.rglob("*") if p.is_file())
+    assert names == ["MODEL_CARD.md", "card.json", "ckpt-0000002.pt", "recipe.lock.yaml"]
+    assert main(["pretrained"]) == 0 and "tiny-teacher" in capsys.readouterr().out
+    assert main(["pretrained", "path", "tiny-teacher"]) == 0
+    assert Path(capsys.readouterr().out.strip()) == folder
+    assert main(["pretrained", "show", "tiny-teacher"]) == 0
+    assert "the generated default clips" in capsys.readouterr().out
+    lock = (folder / "recipe.lock.yaml").read_text()
+    assert "path: null" in lock  # the training data is named in the card, never needed
+
+
+def test_an_unknown_name_suggests_the_close_one(shipped: Path) -> None:
+    with pytest.raises(RetargetError, match="did you mean 'tiny-teacher'"):
+        pretrained.model_dir("tiny-teachr")
+    assert main(["eval", "pretrained:nope"]) != 0
+
+
+def test_eval_play_and_export_take_a_pretrained_name(shipped: Path, tmp_path: Path) -> None:
+    before = sorted(p.name for p in (shipped / "tiny-teacher").rglob("*"))
+    assert main(["eval", "pretrained:tiny-teacher", "--every", "200", "--max-seconds", "0.5",
+                 "--num-envs", "2"]) == 0  # fmt: skip
+    report = json.loads((tmp_path / "eval-tiny-teacher.json").read_text())
+    assert report["overall"]["runs"] >= 1
+    assert main(["play", "pretrained:tiny-teacher", "--seconds", "0.3", "--out",
+                 str(tmp_path / "p.gif")]) == 0  # fmt: skip
+    assert (tmp_path / "p.gif").stat().st_size > 1000
+    assert main(["export", "pretrained:tiny-teacher", "--onnx"]) == 0
+    assert (tmp_path / "export" / "tiny-teacher" / "policy.onnx").is_file()
+    assert sorted(p.name for p in (shipped / "tiny-teacher").rglob("*")) == before
+
+
+def test_a_pretrained_teacher_distils_a_student(shipped: Path, tmp_path: Path) -> None:
+    assert main(["train", "--sensors", "three_point", "--teacher", "pretrained:tiny-teacher",
+                 "--steps", "64", "--set", "env.num_envs=4", "--set",
+                 "algorithm.rollout_steps=8", "--set", "algorithm.actor_hidden=[32]",
+                 "--no-tensorboard", "--set", "name=student"]) == 0  # fmt: skip
+    lock = (tmp_path / "runs" / "student" / "latest" / "recipe.lock.yaml").read_text()
+    assert "teacher: pretrained:tiny-teacher" in lock  # portable: the name, not a path
+
+
+def test_a_policy_only_checkpoint_acts_like_the_full_one(shipped: Path, models: Path) -> None:
+    registry = load_plugins()
+    full = load_run(models.parent / "runs" / "teacher" / "latest", registry)
+    slim = load_run("pretrained:tiny-teacher", registry)
+    obs = full.env.reset()
+    assert torch.equal(full.algorithm.act(obs), slim.algorithm.act(obs))
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_every_shipped_model_loads_and_acts(name: str) -> None:
+    card = pretrained.card(name)
+    assert card.licence and card.data and card.env_steps > 0 and card.cpu_hours > 0
+    loaded = load_run(f"pretrained:{name}", load_plugins(), num_envs=2)
+    assert loaded.resolved.recipe.character.type == card.character
+    obs = loaded.env.reset()
+    for _ in range(5):
+        obs, *_ = loaded.env.step(loaded.algorithm.act(obs))
+    assert all(torch.isfinite(v).all() for v in obs.values())
+    size = sum(f.stat().st_size for f in pretrained.model_dir(name).rglob("*") if f.is_file())
+    assert size < 5e6
+
+
+def test_the_package_ships_every_model_file() -> None:
+    text = (REPO / "pyproject.toml").read_text()
+    for pattern in ("models/*/card.json", "models/*/recipe.lock.yaml", "models/*/checkpoints/*.pt"):
+        assert pattern in text
