@@ -142,6 +142,7 @@ class EstimatorSettings:
     input_noise: float = 0.0
     weight_decay: float = 0.0
     lost_controllers: float = 0.0
+    reach: bool = False  # wrists onto the controllers by IK when estimating (reach.py)
 
 
 class EstimatorLearner:
@@ -218,7 +219,26 @@ class EstimatorLearner:
     def estimate_rows(self, rows: torch.Tensor) -> tuple[PoseOutput, HeadsetFrame]:
         """The prediction at library ``rows`` (causal: only the window's devices)."""
         inputs, hf = sensor_inputs(self.env, rows)
-        return PoseNet.split(self.net.eval()(inputs)), hf
+        out = PoseNet.split(self.net.eval()(inputs))
+        if self.settings.reach:
+            out = self._reach(out, rows, hf)
+        return out, hf
+
+    def _reach(self, out: PoseOutput, rows: torch.Tensor, hf: HeadsetFrame) -> PoseOutput:
+        """The estimate with its wrists on the controllers at ``rows`` (headset frame)."""
+        from dataclasses import replace
+
+        from retarget.learn.pose_samples import matrix_to_6d
+        from retarget.learn.reach import reach, wrist_targets
+
+        lib = self.env.library
+        clip = torch.searchsorted(lib.start, rows, right=True) - 1
+        heights = lib.heights[clip].float()
+        ctrl = lib.devices[rows][:, 1:3]  # (B, 2, 7) world
+        ctrl = torch.cat([hf.points_in(ctrl[..., :3]), hf.quat_in_many(ctrl[..., 3:7])], -1)
+        wrist_pos, wrist_rot = wrist_targets(ctrl, heights)
+        local = reach(out.root_pos, out.matrices, heights, wrist_pos, wrist_rot)
+        return replace(out, rot6d=matrix_to_6d(local))
 
     def state_dict(self) -> dict[str, Any]:
         return {

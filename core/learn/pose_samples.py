@@ -60,6 +60,13 @@ def forward_kinematics(
 ) -> torch.Tensor:
     """Joint positions ``(B, J, 3)`` of root positions ``(B, 3)``, local rotation matrices
     ``(B, J, 3, 3)`` and body heights ``(B,)`` (average proportions)."""
+    return forward_kinematics_globals(root_pos, local, heights)[0]
+
+
+def forward_kinematics_globals(
+    root_pos: torch.Tensor, local: torch.Tensor, heights: torch.Tensor
+) -> tuple[torch.Tensor, list[torch.Tensor]]:
+    """Joint positions ``(B, J, 3)`` and each joint's global rotation matrix ``(B, 3, 3)``."""
     offsets = UNIT_OFFSETS.to(root_pos) * heights[:, None, None]
     pos: list[torch.Tensor] = [root_pos]
     glob: list[torch.Tensor] = [local[:, 0]]
@@ -67,7 +74,7 @@ def forward_kinematics(
         p = PARENTS[j]
         pos.append(pos[p] + (glob[p] @ offsets[:, j, :, None])[..., 0])
         glob.append(glob[p] @ local[:, j])
-    return torch.stack(pos, dim=1)
+    return torch.stack(pos, dim=1), glob
 
 
 @dataclass(frozen=True)
@@ -96,6 +103,11 @@ class HeadsetFrame:
 
     def quat_in(self, q: torch.Tensor) -> torch.Tensor:
         return quat_mul(quat_conj(self.yaw), q)
+
+    def quat_in_many(self, q: torch.Tensor) -> torch.Tensor:
+        """``quat_in`` of quaternions ``(B, K, 4)``, K per sample."""
+        k = q.shape[1]
+        return quat_mul(quat_conj(self.yaw)[:, None].expand(-1, k, -1), q)
 
     def quat_out(self, q: torch.Tensor) -> torch.Tensor:
         return quat_mul(self.yaw, q)
