@@ -1,0 +1,98 @@
+"""A run (or shipped model) measured on a held-out style of the Bandai Namco corpus, by kind
+of motion, with PHC's protocol (one run per clip, first frame to last) beside the project's
+figures.
+
+    python benchmarks/heldout_eval.py RUN [RUN ...] --style normal --out results.json
+    python benchmarks/heldout_eval.py pretrained:human-teacher --kinds walk,run --max-clips 20
+
+The corpus is ``../shared/data/mocap_corpus`` (or ``$RETARGET_SHARED_DATA/mocap_corpus``); a
+run must not have trained on ``--style`` (the packaged corpus recipes hold ``normal`` out).
+Each kind is one ``retarget eval --protocol phc`` on the clips of that kind and style, so its
+figures pool the kind's seconds exactly. ``--max-clips`` takes every k-th clip of a kind to
+keep a quick look short. Prints one table per run and writes every figure as JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from retarget.motion.shared_data import shared_data
+
+KINDS = {
+    "walk": ["walk"],
+    "turn": ["walk-turn-left", "walk-turn-right"],
+    "run": ["run"],
+    "gesture": ["wave-both-hands", "wave-left-hand", "wave-right-hand", "raise-up-both-hands",
+                "raise-up-left-hand", "raise-up-right-hand"],
+}  # fmt: skip
+FIGURES = ("phc_success", "phc_mpjpe_mm", "phc_g_mpjpe_mm", "phc_pa_mpjpe_mm",
+           "phc_accel_mm_f2", "phc_vel_mm_f", "phc_g_mpjpe_mm_succ", "success_frame",
+           "falls_per_min", "headset_cm", "controller_cm", "mpjpe_mm", "runs")  # fmt: skip
+
+
+def corpus_files(style: str, kind: str, max_clips: int | None) -> list[Path]:
+    """The corpus's clips of one kind and style (unpacked from the archives once)."""
+    from retarget.motion.sources import resolve_motion_source, select
+
+    files = resolve_motion_source(shared_data("mocap_corpus"), (".bvh",)) or []
+    chosen = select(files, [f"*_{c}_{style}_*" for c in KINDS[kind]])
+    if max_clips and len(chosen) > max_clips:
+        step = len(chosen) / max_clips
+        chosen = [chosen[int(i * step)] for i in range(max_clips)]
+    return chosen
+
+
+def evaluate(run: str, files: list[Path], num_envs: int) -> dict:
+    """``retarget eval --protocol phc`` over ``files`` (linked into one folder)."""
+    folder = Path(tempfile.mkdtemp(prefix="heldout-"))
+    try:
+        for f in files:
+            (folder / f.name).symlink_to(f.resolve())
+        report = folder / "eval.json"
+        cmd = [sys.executable, "-m", "retarget", "eval", run, "--motions", str(folder),
+               "--protocol", "phc", "--num-envs", str(num_envs), "--json", str(report)]  # fmt: skip
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+        return json.loads(report.read_text())["overall"]
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("runs", nargs="+", help="run directories or pretrained:NAME")
+    parser.add_argument("--style", default="normal", help="held-out style (default normal)")
+    parser.add_argument("--kinds", default=",".join(KINDS), help="comma-separated kinds")
+    parser.add_argument("--max-clips", type=int, default=None, help="at most this many per kind")
+    parser.add_argument("--num-envs", type=int, default=64)
+    parser.add_argument("--out", type=Path, help="JSON of every figure")
+    args = parser.parse_args()
+    results: dict[str, dict[str, dict[str, float]]] = {}
+    for run in args.runs:
+        results[run] = {}
+        for kind in args.kinds.split(","):
+            files = corpus_files(args.style, kind, args.max_clips)
+            if not files:
+                print(f"no {kind} clips of style {args.style}", file=sys.stderr)
+                continue
+            overall = evaluate(run, files, args.num_envs)
+            results[run][kind] = {k: overall[k] for k in FIGURES if k in overall}
+            results[run][kind]["clips"] = len(files)
+        print(f"\n{run} on held-out style '{args.style}'")
+        print(f"{'kind':8} {'clips':>5} " + " ".join(f"{k[:14]:>14}" for k in FIGURES[:-1]))
+        for kind, figures in results[run].items():
+            cells = " ".join(f"{figures.get(k, float('nan')):14.3f}" for k in FIGURES[:-1])
+            print(f"{kind:8} {figures['clips']:5d} {cells}")
+    if args.out:
+        args.out.write_text(json.dumps(results, indent=2))
+        print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,96 @@
+"""Ship trained runs as the package's pretrained models, and keep their training state.
+
+    python benchmarks/ship_models.py human-teacher RUN --heldout heldout.json [--teacher NAME]
+
+For each model: ``core/pretrained/models/NAME`` gets the lock (motion path removed), the
+policy-only checkpoint and the card (data, samples, CPU-hours, the held-out figures that
+``benchmarks/heldout_eval.py`` wrote for that run); ``benchmarks/pretrain/NAME`` gets the
+run's full training state (lock, settings, metrics, newest full checkpoint) so a later
+session continues it exactly:
+
+    retarget train --resume benchmarks/pretrain/human-teacher --minutes 60 --threads 1
+
+CPU-hours are the training's wall-clock hours times the one core each process was given.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import shutil
+from pathlib import Path
+
+import yaml
+
+from retarget.pretrained import ModelCard
+from retarget.pretrained.package import package
+from retarget.train.run_dir import CHECKPOINTS, LOCK, latest_checkpoint, resolve_run
+
+HERE = Path(__file__).resolve().parent
+DATA = ("Bandai Namco Research Motion Dataset 2 (../shared/data/mocap_corpus): styles active, "
+        "elderly, exhausted and masculine (1,630 clips, 2.0 h); style 'normal' (465 clips) "
+        "held out and never trained on")  # fmt: skip
+LICENCE = ("CC BY-NC 4.0 (the training motion's licence): attribution, non-commercial use "
+           "only")  # fmt: skip
+
+
+def last_row(run: Path) -> dict[str, str]:
+    with (run / "metrics.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    return rows[-1]
+
+
+def keep_state(run: Path, name: str) -> Path:
+    """The run's full training state under ``benchmarks/pretrain/NAME`` (newest checkpoint)."""
+    out = HERE / "pretrain" / name
+    if out.exists():
+        shutil.rmtree(out)
+    (out / CHECKPOINTS).mkdir(parents=True)
+    for f in (LOCK, "metrics.csv", "train_settings.json"):
+        if (run / f).exists():
+            shutil.copy2(run / f, out / f)
+    ckpt = latest_checkpoint(run)
+    shutil.copy2(ckpt, out / CHECKPOINTS / ckpt.name)
+    return out
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("name")
+    parser.add_argument("run")
+    parser.add_argument("--summary", required=True)
+    parser.add_argument("--heldout", type=Path, help="heldout_eval.py JSON holding this run")
+    parser.add_argument("--teacher", help="the shipped teacher's name (students)")
+    parser.add_argument("--cores", type=float, default=1.0, help="cores the training used")
+    parser.add_argument("--notes", default="")
+    args = parser.parse_args()
+    run = resolve_run(args.run)
+    lock = yaml.safe_load((run / LOCK).read_text())
+    row = last_row(run)
+    metrics: dict[str, dict[str, float]] = {}
+    if args.heldout:
+        found = json.loads(args.heldout.read_text())
+        mine = found.get(args.run) or next(
+            (v for k, v in found.items() if resolve_run(k) == run), {}
+        )
+        metrics = {f"held-out normal: {kind}": figs for kind, figs in mine.items()}
+    def kind(comp: str | dict) -> str:
+        return comp if isinstance(comp, str) else comp["type"]
+
+    algorithm, character = kind(lock["algorithm"]), kind(lock["character"])
+    sensors = [kind(s) for s in lock.get("sensors") or []]
+    card = ModelCard(
+        name=args.name, summary=args.summary, character=character, sensors=sensors,
+        algorithm=algorithm, data=DATA, licence=LICENCE, env_steps=int(float(row["step"])),
+        cpu_hours=round(float(row["elapsed_s"]) / 3600 * args.cores, 3),
+        teacher=f"pretrained:{args.teacher}" if args.teacher else None, metrics=metrics,
+        notes=args.notes,
+    )  # fmt: skip
+    print(package(run, card, teacher=card.teacher))
+    print(keep_state(run, args.name))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
