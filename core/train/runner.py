@@ -20,7 +20,7 @@ import signal
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import FrameType
 from typing import Any
@@ -69,6 +69,19 @@ def seed_everything(seed: int) -> torch.Generator:
     return torch.Generator().manual_seed(seed)
 
 
+def _with_sizes(
+    resolved: ResolvedRecipe, num_envs: int | None, threads: int | None
+) -> ResolvedRecipe:
+    """``resolved`` with the environment count and physics threads a trainer was given, so the
+    locked recipe builds the same env again on resume."""
+    recipe, update = resolved.recipe, {}
+    if num_envs is not None:
+        update["env"] = recipe.env.model_copy(update={"num_envs": num_envs})
+    if threads is not None:
+        update["sim"] = recipe.sim.model_copy(update={"threads": threads})
+    return replace(resolved, recipe=recipe.model_copy(update=update)) if update else resolved
+
+
 class Trainer:
     """Owns the env, the algorithm, the logger and the run directory of one training run."""
 
@@ -91,6 +104,7 @@ class Trainer:
                 field="algorithm",
                 hint="add `algorithm: ppo` to the recipe or pass --algorithm ppo",
             )
+        resolved = _with_sizes(resolved, num_envs, threads)  # the lock records what runs
         self.resolved, self.run, self.comm = resolved, run, comm
         algorithm = resolved.component("algorithm").instantiate()
         assert isinstance(algorithm, Algorithm)

@@ -333,3 +333,16 @@ def test_a_killed_run_resumes_losing_at_most_one_interval(recipe: Path, tmp_path
     )  # fmt: skip
     assert resumed.returncode == 0, resumed.stdout + resumed.stderr
     assert load_checkpoint(latest_checkpoint(run))["progress"]["iteration"] == last + 1
+
+
+def test_a_trainer_given_sizes_locks_them_so_the_run_resumes(recipe: Path, tmp_path: Path) -> None:
+    """Trainer(num_envs=, threads=) builds the env with them and the lock says so: resuming
+    the run from the command line builds the same env (it failed on the state's env count)."""
+    resolved = load(str(recipe), load_plugins(), shorthands={}, assignments=[])
+    run = new_run_dir(tmp_path / "runs", "sized")
+    t = Trainer(resolved, run, num_envs=3, threads=1, checkpoint_every=1, tensorboard=False)
+    assert t.env.num_envs == 3
+    t.train(Budget(steps=2 * 3 * 8))
+    lock = (run / "recipe.lock.yaml").read_text()
+    assert "num_envs: 3" in lock
+    assert main(["train", "--resume", str(run), "--steps", "24", "--no-tensorboard"]) == 0
