@@ -58,8 +58,9 @@ class EstimatedBody(Sensor):
             self._inner = [cls(cls.Config.model_validate({"past": 2}))]
             self._inner[0].bind(layout)
             size = sum(s.spec(layout).size for s in self._inner)
-            torch.manual_seed(0)
-            self._net = DeployedEstimator(PoseNet(size, (64,))).eval()
+            with torch.random.fork_rng(devices=[]):  # a fixed net; the run's RNG untouched
+                torch.manual_seed(0)
+                self._net = DeployedEstimator(PoseNet(size, (64,))).eval()
             return
         from retarget.motion.procedural import idle_clip
         from retarget.train.load import load_run
