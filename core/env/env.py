@@ -282,6 +282,7 @@ class RetargetEnv:
         self.episode_step[env_ids] = 0
         self.episode_return[env_ids] = 0.0
         self.prev_action[env_ids] = 0.0
+        self.rewards.reset(env_ids)
         self.terminations.reset(env_ids)
         for plugin in (*self.sensors, *self.observers):
             plugin.reset(env_ids)
@@ -421,6 +422,7 @@ class RetargetEnv:
         self.episode_return = state["episode_return"].clone()
         self.prev_action = state["prev_action"].clone()
         self.rewards.episode_sums = state["reward_sums"].clone()
+        self.rewards.reset(torch.arange(self.num_envs))  # terms' own state is not saved
         self.generator.set_state(state["generator"])
         self.nan_resets = int(state["nan_resets"])
         self.nan_actions = int(state.get("nan_actions", 0))

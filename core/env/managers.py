@@ -65,9 +65,13 @@ class RewardManager:
             return {}
         sums = self.episode_sums[env_ids].mean(dim=0)
         self.episode_sums[env_ids] = 0.0
+        return {name: float(v) for name, v in zip(self.names, sums, strict=True)}
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        """A new episode in ``env_ids`` (however it started: after an episode's end, a
+        placement, a blown-up simulation, a restored checkpoint): every term forgets them."""
         for term in self.terms.values():
             term.reset(env_ids)
-        return {name: float(v) for name, v in zip(self.names, sums, strict=True)}
 
 
 class TerminationManager:
