@@ -346,34 +346,38 @@ class RetargetEnv:
         self.last_context = ctx  # the step's state before any reset (evaluation reads it)
         reward = self.rewards.compute(ctx, valid=~bad)
         reward = torch.where(bad, torch.zeros_like(reward), torch.nan_to_num(reward))
-        t3 = time.perf_counter()
         self.episode_return += reward
-        t4 = time.perf_counter()
+        t3 = time.perf_counter()
         done = failed | timed_out
         ids = done.nonzero().flatten()
         info: dict = {"nan_resets": int(bad.sum()), "nan_actions": int(broken.sum())}
         self.nan_resets += info["nan_resets"]
         self.nan_actions += info["nan_actions"]
         self.prev_action = action.clone()
+        final_obs = 0.0
         if ids.numel():
             if timed_out.any():  # only time-outs bootstrap from the observation they ended in
+                t_obs = time.perf_counter()
                 info["final_obs"] = self.observe(ctx)
+                final_obs = time.perf_counter() - t_obs
             info["episode"] = {
                 "return": self.episode_return[ids].clone(),
                 "length": self.episode_step[ids].clone(),
                 "terms": self.rewards.pop_episodes(ids),
             }
+            t4 = time.perf_counter()
             self._reset_envs(ids)
             ctx = self._context(self.prev_action)
+        else:
+            t4 = time.perf_counter()
         t5 = time.perf_counter()
         obs = self.observe(ctx)
         t6 = time.perf_counter()
         sec["reference"] += t1 - t0
         sec["terminations"] += t2 - t1
-        sec["rewards"] += t3 - t2
-        sec["observations"] += t6 - t5
+        sec["rewards"] += t4 - t2 - final_obs  # the terms, the returns and episode logs
+        sec["observations"] += t6 - t5 + final_obs
         sec["resets"] += t5 - t4
-        sec["rewards"] += t4 - t3  # failure penalties
         return obs, reward, failed, timed_out, info
 
     def _assist(self) -> None:

@@ -1,0 +1,45 @@
+"""The env's step timers book each kind of work where it belongs: the observation an episode
+ended in counts as observations, not resets (it was booked as resets)."""
+
+from __future__ import annotations
+
+import time
+
+import torch
+
+import retarget
+from retarget.env import EnvOptions, RetargetEnv
+from retarget.motion.procedural import default_motions
+from retarget.registry.loader import load_plugins
+
+
+class Slow(retarget.Sensor):
+    """One number per env, taking 5 ms per call."""
+
+    name = "slow"
+
+    def spec(self, layout: retarget.Layout) -> retarget.ObsSpec:
+        return retarget.ObsSpec((1,))
+
+    def observe(self, ctx: retarget.StepContext) -> torch.Tensor:
+        time.sleep(0.005)
+        return torch.zeros(ctx.num_envs, 1)
+
+
+def test_final_observations_are_booked_as_observations() -> None:
+    registry = load_plugins()
+    character = registry.get("character", "human").cls()
+    cap = registry.get("termination", "episode_cap").cls
+    env = RetargetEnv(character, default_motions()[:1], sensors=[Slow()],
+                      terminations={"cap": cap(cap.Config(max_steps=1))},
+                      options=EnvOptions(num_envs=2))  # fmt: skip
+    env.reset()
+    for key in env.seconds:
+        env.seconds[key] = 0.0
+    for _ in range(10):  # every step ends both episodes by time-out: two observations each
+        env.step(torch.zeros(2, env.action_dim))
+    sec = env.seconds
+    # the Slow sensor is read by the actor and critic groups: 2-4 calls of 5 ms per step
+    assert sec["observations"] > 0.09, sec
+    assert sec["resets"] < 0.25 * sec["observations"], sec
+    assert sec["rewards"] < 0.25 * sec["observations"], sec
