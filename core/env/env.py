@@ -144,12 +144,7 @@ class RetargetEnv:
         """Gather more for every later step (evaluation asks for the scene contact labels its
         metrics read); offsets are frames ``>= 1`` ahead."""
         for need in needs:
-            bad = [k for k in need.reference_offsets if not isinstance(k, int) or k < 1]
-            if bad:
-                raise PluginError(
-                    f"needs() asks for reference offsets {bad}; offsets are ints >= 1 "
-                    "(frames ahead)"
-                )
+            _check_offsets(need.reference_offsets, None)
             self._needs = self._needs | need
 
     @property
@@ -347,7 +342,6 @@ class RetargetEnv:
         reward = self.rewards.compute(ctx, valid=~bad)
         reward = torch.where(bad, torch.zeros_like(reward), torch.nan_to_num(reward))
         self.episode_return += reward
-        t3 = time.perf_counter()
         done = failed | timed_out
         ids = done.nonzero().flatten()
         info: dict = {"nan_resets": int(bad.sum()), "nan_actions": int(broken.sum())}
@@ -450,10 +444,14 @@ def random_actions(
 
 
 def _check_needs(plugin: StepPlugin) -> None:
-    offsets = plugin.needs().reference_offsets
+    _check_offsets(plugin.needs().reference_offsets, f"{plugin.kind} {plugin.name}")
+
+
+def _check_offsets(offsets: Sequence[object], plugin: str | None) -> None:
+    """Reference offsets are ints >= 1 (frames ahead); a bool is not a frame count."""
     bad = [k for k in offsets if not isinstance(k, int) or isinstance(k, bool) or k < 1]
     if bad:
         raise PluginError(
             f"needs() asks for reference offsets {bad}; offsets are ints >= 1 (frames ahead)",
-            plugin=f"{plugin.kind} {plugin.name}",
+            plugin=plugin,
         )

@@ -43,3 +43,18 @@ def test_final_observations_are_booked_as_observations() -> None:
     assert sec["observations"] > 0.09, sec
     assert sec["resets"] < 0.25 * sec["observations"], sec
     assert sec["rewards"] < 0.25 * sec["observations"], sec
+
+
+def test_gather_refuses_a_bool_offset_as_needs_validation_does() -> None:
+    import pytest
+
+    from retarget.errors import PluginError
+    from retarget.kinds.step import StepNeeds
+
+    registry = load_plugins()
+    env = RetargetEnv(registry.get("character", "human").cls(), default_motions()[:1],
+                      options=EnvOptions(num_envs=1))  # fmt: skip
+    with pytest.raises(PluginError, match=r"offsets \[True\]"):
+        env.gather(StepNeeds(reference_offsets=(True,)))  # type: ignore[arg-type]
+    env.gather(StepNeeds(reference_offsets=(2,)))
+    assert 2 in env.step_needs.reference_offsets
