@@ -147,3 +147,14 @@ def test_allowlist_limits_third_party_distributions(make_dist, monkeypatch) -> N
     assert "calm" not in names and "action_diff" in names
     monkeypatch.setenv("RETARGET_LOAD_PLUGINS", "retarget-calm")
     assert "calm" in load_plugins(strict=True).names("reward")
+
+
+def test_every_plugin_with_an_unknown_hook_is_named_and_left_out(make_dist) -> None:
+    """Two plugins with unknown hooks: both are warned about and left out (only the first
+    was handled; the second then broke every later lookup), and the good one loads."""
+    make_dist("retarget-odd", {"odd_a": UNKNOWN_HOOK, "odd_b": UNKNOWN_HOOK, "calm": GOOD})
+    with pytest.warns(PluginLoadWarning) as seen:
+        registry = load_plugins(strict=False)
+    named = " ".join(str(w.message) for w in seen)
+    assert "odd_a" in named and "odd_b" in named and named.count("implements an unknown hook") == 2
+    assert registry.get("reward", "calm").dist == "retarget-odd"

@@ -127,18 +127,21 @@ def load_plugins(
             problem(name, dist, "has invalid hook implementations", exc)
             continue
         provenance[name] = (dist, version)
-    try:
-        pm.check_pending()
-    except pluggy.PluginValidationError as exc:
-        plugin = getattr(exc, "plugin", None)
-        pname = pm.get_name(plugin) if plugin is not None else "?"
-        problem(
-            pname or "?",
-            provenance.get(pname or "", ("?", ""))[0],
-            "implements an unknown hook",
-            exc,
-        )
-        if plugin is not None:
+    for _ in range(len(candidates) + 1):  # each round finds one plugin with an unknown hook
+        try:
+            pm.check_pending()
+            break
+        except pluggy.PluginValidationError as exc:
+            plugin = getattr(exc, "plugin", None)
+            pname = pm.get_name(plugin) if plugin is not None else "?"
+            problem(
+                pname or "?",
+                provenance.get(pname or "", ("?", ""))[0],
+                "implements an unknown hook",
+                exc,
+            )
+            if plugin is None:
+                break
             pm.unregister(plugin)
 
     for hook_name, kind in hookspecs.HOOK_KINDS.items():
