@@ -157,4 +157,4 @@ def test_every_plugin_with_an_unknown_hook_is_named_and_left_out(make_dist) -> N
         registry = load_plugins(strict=False)
     named = " ".join(str(w.message) for w in seen)
     assert "odd_a" in named and "odd_b" in named and named.count("implements an unknown hook") == 2
-    assert registry.get("reward", "calm").dist == "retarget-odd"
+    assert registry.get("reward", "calm").distribution == "retarget-odd"
