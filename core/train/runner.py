@@ -235,7 +235,7 @@ class Trainer:
         previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
         for sig in previous:
             signal.signal(sig, self._request_stop)
-        last = None
+        last, saved_at = None, -1
         try:
             start = time.perf_counter() - self.progress.elapsed
             while not self.comm.any(budget.done(self.progress.env_steps, self.progress.elapsed)):
@@ -273,7 +273,9 @@ class Trainer:
                     break
                 if p.iteration % self.checkpoint_every == 0:
                     last = self._save_uninterrupted()
-            last = self._save_uninterrupted()
+                    saved_at = p.iteration
+            if last is None or saved_at != self.progress.iteration:  # never the same one twice
+                last = self._save_uninterrupted()
         finally:
             for sig, handler in previous.items():
                 signal.signal(sig, handler)

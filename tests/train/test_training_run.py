@@ -346,3 +346,21 @@ def test_a_trainer_given_sizes_locks_them_so_the_run_resumes(recipe: Path, tmp_p
     lock = (run / "recipe.lock.yaml").read_text()
     assert "num_envs: 3" in lock
     assert main(["train", "--resume", str(run), "--steps", "24", "--no-tensorboard"]) == 0
+
+
+def test_a_budget_ending_on_a_checkpoint_iteration_writes_it_once(
+    recipe: Path, tmp_path: Path
+) -> None:
+    t = trainer(recipe, tmp_path, "once")  # checkpoint_every=2
+    written = []
+    save = t.save
+
+    def counting():
+        written.append(t.progress.iteration)
+        return save()
+
+    t.save = counting  # type: ignore[method-assign]
+    t.train(Budget(steps=4 * SAMPLES))
+    assert written == [2, 4]
+    t.train(Budget(steps=5 * SAMPLES))  # ends between checkpoints: the end is saved
+    assert written == [2, 4, 5]
