@@ -123,3 +123,18 @@ def test_the_package_ships_every_model_file() -> None:
     text = (REPO / "pyproject.toml").read_text()
     for pattern in ("models/*/card.json", "models/*/recipe.lock.yaml", "models/*/checkpoints/*.pt"):
         assert pattern in text
+
+
+README_EXAMPLE = "human-three_point-student"
+
+
+@pytest.mark.skipif(README_EXAMPLE not in SHIPPED, reason="the README's student is not shipped")
+def test_the_readme_first_example_plays_the_shipped_student(tmp_path: Path) -> None:
+    """README's first command, with a shorter clip: the shipped student driven by the sample
+    headset recording."""
+    out = tmp_path / "me.gif"
+    rc = main(["play", f"pretrained:{README_EXAMPLE}", "--input",
+               str(REPO / "examples" / "recordings" / "walk_openxr.jsonl"), "--seconds", "1",
+               "--out", str(out)])  # fmt: skip
+    assert rc == 0 and out.stat().st_size > 1000
+    assert f"pretrained:{README_EXAMPLE}" in (REPO / "README.md").read_text()

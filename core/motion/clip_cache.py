@@ -23,7 +23,7 @@ import numpy as np
 from retarget.kinds import MotionFormat
 from retarget.motion.clip import MotionClip
 
-VERSION = 1
+VERSION = 2
 """Bumped when readers map files differently, so old entries are not reused."""
 
 

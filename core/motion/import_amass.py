@@ -30,6 +30,7 @@ from retarget.motion.canonicalize import up_axis_matrix
 from retarget.motion.clip import MotionClip
 from retarget.motion.contacts import label_contacts
 from retarget.motion.floor import align_floor, foot_points
+from retarget.motion.plausible import check_plausible
 
 SMPL_OF_CANONICAL = (0, 1, 4, 7, 10, 2, 5, 8, 11, 3, 6, 9, 12, 15, 13, 16, 18, 20, 14, 17, 19, 21)
 """SMPL body joint index of each canonical joint (canonical order)."""
@@ -140,4 +141,5 @@ def load_amass(
     clip = align_floor(clip)
     contacts = label_contacts(foot_points(clip), clip.meta["foot_clearance"], clip.fps)  # type: ignore[arg-type]
     meta = {**clip.meta, "up": up, "gender": gender, "body_model": str(model) if model else None}
-    return clip.with_(contacts=contacts, skeleton="smpl", meta=meta, source=path)
+    clip = clip.with_(contacts=contacts, skeleton="smpl", meta=meta, source=path)
+    return check_plausible(clip, path)

@@ -19,6 +19,7 @@ from retarget.motion.canonicalize import SourceMotion, canonicalize
 from retarget.motion.clip import MotionClip
 from retarget.motion.contacts import label_contacts
 from retarget.motion.floor import align_floor, foot_points
+from retarget.motion.plausible import check_plausible
 from retarget.motion.resample import resample
 
 
@@ -77,7 +78,7 @@ def clip_from_bvh(
     )
     if fps is not None:
         clip = resample(clip, fps)
-    return clip
+    return check_plausible(clip, file)
 
 
 def load_bvh(path: str | Path, **options: object) -> MotionClip:

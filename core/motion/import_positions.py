@@ -24,6 +24,7 @@ from retarget.motion.clip import MotionClip
 from retarget.motion.contacts import label_contacts
 from retarget.motion.fit_positions import clip_from_positions
 from retarget.motion.floor import align_floor, foot_points
+from retarget.motion.plausible import check_plausible
 
 MAX_JOINTS = 1000
 MAX_NAMES_BYTES = 1 << 20
@@ -128,4 +129,5 @@ def load_positions(
     clip = align_floor(clip)
     contacts = label_contacts(foot_points(clip), clip.meta["foot_clearance"], clip.fps)  # type: ignore[arg-type]
     meta = {**clip.meta, "units": units, "up": up, "layout": label}
-    return clip.with_(contacts=contacts, skeleton=f"positions ({label})", meta=meta, source=path)
+    clip = clip.with_(contacts=contacts, skeleton=f"positions ({label})", meta=meta, source=path)
+    return check_plausible(clip, path)
