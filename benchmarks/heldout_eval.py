@@ -48,7 +48,7 @@ def corpus_files(style: str, kind: str, max_clips: int | None) -> list[Path]:
     return chosen
 
 
-def evaluate(run: str, files: list[Path], num_envs: int) -> dict:
+def evaluate(run: str, files: list[Path], num_envs: int, sets: list[str] = ()) -> dict:
     """``retarget eval --protocol phc`` over ``files`` (linked into one folder)."""
     folder = Path(tempfile.mkdtemp(prefix="heldout-"))
     try:
@@ -56,7 +56,8 @@ def evaluate(run: str, files: list[Path], num_envs: int) -> dict:
             (folder / f.name).symlink_to(f.resolve())
         report = folder / "eval.json"
         cmd = [sys.executable, "-m", "retarget", "eval", run, "--motions", str(folder),
-               "--protocol", "phc", "--num-envs", str(num_envs), "--json", str(report)]  # fmt: skip
+               "--protocol", "phc", "--num-envs", str(num_envs), "--json", str(report),
+               *(f"--set={a}" for a in sets)]  # fmt: skip
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
         return json.loads(report.read_text())["overall"]
     finally:
@@ -71,6 +72,8 @@ def main() -> int:
     parser.add_argument("--max-clips", type=int, default=None, help="at most this many per kind")
     parser.add_argument("--num-envs", type=int, default=64)
     parser.add_argument("--out", type=Path, help="JSON of every figure")
+    parser.add_argument("--set", dest="sets", action="append", default=[],
+                        help="passed to retarget eval (e.g. algorithm.reach_controllers=false)")
     args = parser.parse_args()
     results: dict[str, dict[str, dict[str, float]]] = {}
     for run in args.runs:
@@ -80,7 +83,7 @@ def main() -> int:
             if not files:
                 print(f"no {kind} clips of style {args.style}", file=sys.stderr)
                 continue
-            overall = evaluate(run, files, args.num_envs)
+            overall = evaluate(run, files, args.num_envs, args.sets)
             results[run][kind] = {k: overall[k] for k in FIGURES if k in overall}
             results[run][kind]["clips"] = len(files)
         print(f"\n{run} on held-out style '{args.style}'")

@@ -250,6 +250,8 @@ class EstimatorLearner:
 
     def load_state_dict(self, state: Any) -> None:
         self.net.load_state_dict(state["net"])
+        if "optimizer" not in state:  # a policy-only checkpoint (pretrained): estimating only
+            return
         self.optimizer.load_state_dict(state["optimizer"])
         self.iteration = int(state["iteration"])
         self.generator.set_state(state["generator"])

@@ -19,12 +19,16 @@ from retarget.pretrained import CARD, MODELS, ModelCard
 from retarget.train.checkpoint import load_checkpoint, save_checkpoint
 from retarget.train.run_dir import CHECKPOINTS, LOCK, latest_checkpoint, resolve_run
 
-KEEP = ("actor", "obs_norm", "iteration", "env_steps")
+TRAINING_ONLY = ("optimizer", "critic", "value_norm", "generator", "last_obs", "buffer",
+                 "overlap", "episode_return", "episode_length", "finished_returns",
+                 "finished_lengths")  # fmt: skip
+"""Algorithm state only training reads (the learners load a checkpoint without it as
+policy-only: acting, evaluating, exporting, distilling from it, warm starts)."""
 
 
 def policy_only(state: dict[str, Any]) -> dict[str, Any]:
     """A checkpoint with only what acting (and fine-tuning) reads."""
-    algorithm = {k: v for k, v in state["algorithm"].items() if k in KEEP}
+    algorithm = {k: v for k, v in state["algorithm"].items() if k not in TRAINING_ONLY}
     return {"algorithm": algorithm, "progress": state.get("progress", {})}
 
 
