@@ -48,7 +48,8 @@ def corpus_files(style: str, kind: str, max_clips: int | None) -> list[Path]:
     return chosen
 
 
-def evaluate(run: str, files: list[Path], num_envs: int, sets: list[str] = ()) -> dict:
+def evaluate(run: str, files: list[Path], num_envs: int, sets: list[str] = (),
+             checkpoint: str | None = None) -> dict:
     """``retarget eval --protocol phc`` over ``files`` (linked into one folder)."""
     folder = Path(tempfile.mkdtemp(prefix="heldout-"))
     try:
@@ -57,7 +58,8 @@ def evaluate(run: str, files: list[Path], num_envs: int, sets: list[str] = ()) -
         report = folder / "eval.json"
         cmd = [sys.executable, "-m", "retarget", "eval", run, "--motions", str(folder),
                "--protocol", "phc", "--num-envs", str(num_envs), "--json", str(report),
-               *(f"--set={a}" for a in sets)]  # fmt: skip
+               *(f"--set={a}" for a in sets),
+               *(["--checkpoint", checkpoint] if checkpoint else [])]  # fmt: skip
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
         return json.loads(report.read_text())["overall"]
     finally:
@@ -72,6 +74,7 @@ def main() -> int:
     parser.add_argument("--max-clips", type=int, default=None, help="at most this many per kind")
     parser.add_argument("--num-envs", type=int, default=64)
     parser.add_argument("--out", type=Path, help="JSON of every figure")
+    parser.add_argument("--checkpoint", help="a checkpoint file of the (one) run")
     parser.add_argument("--set", dest="sets", action="append", default=[],
                         help="passed to retarget eval (e.g. algorithm.reach_controllers=false)")
     args = parser.parse_args()
@@ -83,7 +86,7 @@ def main() -> int:
             if not files:
                 print(f"no {kind} clips of style {args.style}", file=sys.stderr)
                 continue
-            overall = evaluate(run, files, args.num_envs, args.sets)
+            overall = evaluate(run, files, args.num_envs, args.sets, args.checkpoint)
             results[run][kind] = {k: overall[k] for k in FIGURES if k in overall}
             results[run][kind]["clips"] = len(files)
         print(f"\n{run} on held-out style '{args.style}'")

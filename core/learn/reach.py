@@ -5,11 +5,16 @@ A pose estimator predicts joint rotations; its hands come from forward kinematic
 of six joints (root, three spine joints, collar, shoulder, elbow), so small rotation errors add
 up to tens of centimetres at the hands on motion it never saw, although the controllers give
 each wrist's position and orientation outright (the controller sits at a fixed mount on the
-wrist, :mod:`retarget.motion.devices`). This closes that gap without training: per arm, the
-shoulder and elbow rotations are changed by the smallest rotations that bring the wrist onto
-the controller's wrist point, keeping the arm's swivel plane (where the elbow points) as the
-network predicted it, and the wrist takes the controller's orientation. Batched in torch,
-tens of microseconds per frame.
+wrist, :mod:`retarget.motion.devices`). This closes that gap on the estimator's own skeleton
+without training: per arm, the shoulder and elbow rotations are changed by the smallest
+rotations that bring the wrist onto the controller's wrist point, keeping the arm's swivel
+plane (where the elbow points) as the network predicted it, and the wrist takes the
+controller's orientation. Batched in torch, tens of microseconds per frame.
+
+Measured on held-out corpus walks (estimator trained on 2 h of motion), the character's hands
+came out *farther* from the reference's with it (6.4 cm) than without (3.1 cm): the arm that
+reaches the point on the average skeleton is not the person's arm, and the character's own
+proportions turn that difference into hand error. So it is opt-in (``reach_controllers``).
 """
 
 from __future__ import annotations
