@@ -76,6 +76,21 @@ def _walk(root: Path) -> list[Path]:
     return out
 
 
+def read_file(path: Path, formats: Mapping[str, MotionFormat]) -> MotionClip:
+    """One motion file read by the format for it, through the clip cache."""
+    return read_cached(reader_for(path, formats), path, clip_cache_dir())
+
+
+def expand(paths: Sequence[str | Path], suffixes: Iterable[str]) -> list[Path]:
+    """Files, folders and archives as the motion files they stand for (files as given)."""
+    out: list[Path] = []
+    for given in paths:
+        p = Path(given)
+        many = p.is_dir() or is_archive(p)
+        out.extend((resolve_motion_source(p, suffixes) or []) if many else [p])
+    return out
+
+
 def reader_for(path: Path, formats: Mapping[str, MotionFormat]) -> MotionFormat:
     """The motion format whose suffixes match ``path`` (and that accepts it, when several
     share the suffix); the error lists the known suffixes."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import retarget
 from retarget import Command, MotionError, RetargetError
@@ -14,7 +14,6 @@ from retarget.errors import require_extra
 
 if TYPE_CHECKING:
     from retarget.motion.clip import MotionClip
-    from retarget.registry import Registry
 
 
 def _add_format_args(parser: argparse.ArgumentParser) -> None:
@@ -26,7 +25,7 @@ def _add_format_args(parser: argparse.ArgumentParser) -> None:
                         help="position-only files: the capture's frame rate")  # fmt: skip
 
 
-def _formats(args: argparse.Namespace, registry: Registry | None) -> dict:
+def _formats(args: argparse.Namespace, registry: Any) -> dict:
     """The readers the flags ask for, from the invocation's registry (never reloaded)."""
     chosen = getattr(args, "motion_format", None)
     joints, fps = getattr(args, "joints", None), getattr(args, "source_fps", None)
@@ -48,13 +47,12 @@ def _formats(args: argparse.Namespace, registry: Registry | None) -> dict:
 
 
 def _read(path: str, formats: dict) -> MotionClip:
-    from retarget.motion.clip_cache import clip_cache_dir, read_cached
-    from retarget.motion.sources import reader_for
+    from retarget.motion.sources import read_file
 
     p = Path(path)
     if not p.is_file():
         raise MotionError("no such file", file=p)
-    return read_cached(reader_for(p, formats), p, clip_cache_dir())
+    return read_file(p, formats)
 
 
 class MotionCommand(Command):
@@ -206,15 +204,10 @@ class MotionCommand(Command):
             "up",
         ):
             table.add_column(col, justify="left" if col in ("file", "skeleton") else "right")
-        from retarget.motion.archives import is_archive
-        from retarget.motion.sources import resolve_motion_source
+        from retarget.motion.sources import expand
 
         suffixes = [x for fmt in self.formats.values() for x in fmt.suffixes]
-        files: list[str | Path] = []
-        for given in args.files:  # folders and archives stand for the motion files they hold
-            p = Path(given)
-            many = p.is_dir() or is_archive(p)
-            files.extend(resolve_motion_source(p, suffixes) or [] if many else [given])
+        files = expand(args.files, suffixes)  # folders and archives: the files they hold
         seconds = 0.0
         for f in files:
             clip = _read(str(f), self.formats)
