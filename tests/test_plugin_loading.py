@@ -102,16 +102,15 @@ def test_broken_plugin_leaves_cli_working_and_strict_fails(make_dist, capsys, mo
     assert main(["plugins"]) == 2
 
 
-def test_duplicate_names_disable_both_with_a_warning_naming_both(make_dist, capsys) -> None:
+def test_a_duplicate_of_a_built_in_name_keeps_the_built_in(make_dist, capsys) -> None:
     make_dist("retarget-dupe", {"dupe": DUPLICATE})
     with pytest.warns(PluginLoadWarning) as caught:
         registry = load_plugins(strict=False)
     text = " ".join(str(w.message) for w in caught)
-    assert "duplicate reward name 'action_min'" in text and "neither is used" in text
-    assert "retarget-dupe" in text and "retarget 0.1.0" in text
-    assert "action_min" not in registry.names("reward")
+    assert "reward name 'action_min' of a built-in" in text and "retarget-dupe" in text
+    assert registry.get("reward", "action_min").distribution == "retarget"
     assert "action_diff" in registry.names("reward")  # everything else still loads
-    with pytest.raises(PluginError, match="duplicate reward name"):
+    with pytest.raises(PluginError, match="of a built-in"):
         load_plugins(strict=True)
     assert main(["plugins"]) == 0  # the CLI still starts
     assert "warning:" in capsys.readouterr().err
@@ -158,3 +157,33 @@ def test_every_plugin_with_an_unknown_hook_is_named_and_left_out(make_dist) -> N
     named = " ".join(str(w.message) for w in seen)
     assert "odd_a" in named and "odd_b" in named and named.count("implements an unknown hook") == 2
     assert registry.get("reward", "calm").distribution == "retarget-odd"
+
+
+SHADOW = """
+import retarget
+from retarget.plugins.rewards.action import ActionMin
+
+class Fake(ActionMin):
+    '''Claims a built-in's name.'''
+    name = "action_diff"
+
+@retarget.hookimpl
+def register_rewards(register):
+    register(Fake)
+"""
+
+
+def test_a_built_in_cannot_be_shadowed(make_dist) -> None:
+    """A package whose entry point is named like a built-in (``ppo``) and whose plugin takes a
+    built-in's name (``action_diff``) leaves both built-ins working and is named; both were
+    disabled before."""
+    make_dist("retarget-shadow", {"ppo": GOOD, "shadow": SHADOW})
+    with pytest.warns(PluginLoadWarning) as seen:
+        registry = load_plugins(strict=False)
+    named = " ".join(str(w.message) for w in seen)
+    assert "retarget-shadow" in named and "built-in" in named
+    assert registry.get("algorithm", "ppo").distribution == "retarget"
+    assert registry.get("reward", "action_diff").distribution == "retarget"
+    assert "calm" not in registry.names("reward")  # its entry point was the intruder
+    with pytest.raises(PluginError, match="built-in"):
+        load_plugins(strict=True)

@@ -109,7 +109,19 @@ def load_plugins(
 
     clashing: set[str] = set()
     for name, dist, version, module in candidates:
-        if pm.has_plugin(name) or name in clashing:
+        held = provenance.get(name, ("", ""))[0] if pm.has_plugin(name) else ""
+        if OWN_DISTRIBUTION in (held, dist) and held != dist and held:
+            # a built-in's entry point is never shadowed: the other one is left out, named
+            intruder = dist if held == OWN_DISTRIBUTION else held
+            problem(
+                name, intruder, "shares its entry point name with a built-in of retarget; the "
+                "built-in is kept and this one is not loaded",
+                PluginError("rename this entry point"),
+            )  # fmt: skip
+            if held == OWN_DISTRIBUTION:
+                continue
+            pm.unregister(name=name)
+        elif pm.has_plugin(name) or name in clashing:
             if pm.has_plugin(name):
                 other = provenance[name][0]
                 pm.unregister(name=name)
@@ -174,6 +186,18 @@ def _call_hook(impl, kind, dist, version, registry, problem) -> None:
         try:
             registry.add(entry)
         except DuplicateName as exc:
+            other = registry.owner(exc.kind, exc.name)
+            builtin = other is not None and other.distribution == OWN_DISTRIBUTION
+            if other is not None and (builtin or dist == OWN_DISTRIBUTION):  # not shadowed
+                intruder = other if not builtin else entry
+                if not builtin:
+                    registry.replace(entry)
+                problem(
+                    intruder.plugin, intruder.distribution,
+                    f"registered the {exc.kind} name '{exc.name}' of a built-in; the built-in "
+                    "is kept and this one is not used", PluginError("rename the plugin"),
+                )  # fmt: skip
+                continue
             registry.withdraw(exc.kind, exc.name)
             problem(impl.plugin_name, dist, "registered a name another plugin has", exc)
         except PluginError as exc:

@@ -83,6 +83,21 @@ class Registry:
         for alias in entry.aliases:
             self.aliases[entry.kind][alias] = entry.name
 
+    def owner(self, kind: str, name: str) -> Entry | None:
+        """The entry holding ``name`` (a name or alias) of ``kind``, if any."""
+        return self._lookup(kind, name)
+
+    def replace(self, entry: Entry) -> None:
+        """Put ``entry`` in place of whatever holds its names (a built-in taking back a name
+        a third party registered first)."""
+        for label in (entry.name, *entry.aliases):
+            other = self._lookup(entry.kind, label)
+            if other is not None:
+                del self.entries[entry.kind][other.name]
+                for alias in other.aliases:
+                    self.aliases[entry.kind].pop(alias, None)
+        self.add(entry)
+
     def withdraw(self, kind: str, name: str) -> None:
         """Remove ``name`` (and whatever it is an alias of) and refuse it from now on: when two
         plugins claim one name, neither is used, rather than whichever loaded last."""
