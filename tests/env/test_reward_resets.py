@@ -62,3 +62,15 @@ def test_a_blown_up_env_resets_its_terms() -> None:
     env.sim._qvel[1] = 1e9  # env 1's physics explodes in the next step: it is put back
     bad = env.step_physics(torch.zeros(4, env.action_dim))
     assert bool(bad[1]) and term.resets[1] == before[1] + 1
+
+
+def test_nan_action_counts_survive_a_checkpoint() -> None:
+    env, _ = _env()
+    action = torch.zeros(4, env.action_dim)
+    action[1] = float("nan")
+    env.step(action)
+    assert env.nan_actions == 1
+    state = env.state_dict()
+    again, _ = _env()
+    again.load_state_dict(state)
+    assert again.nan_actions == 1 and again.nan_resets == env.nan_resets

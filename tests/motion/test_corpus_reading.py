@@ -135,3 +135,25 @@ def torch_equal(a, b) -> bool:
     import torch
 
     return bool(torch.equal(a, b))
+
+
+def test_motion_commands_use_the_invocations_registry(tmp_path: Path, monkeypatch) -> None:
+    """`retarget motion inspect` of many files loads the plugins once (it reloaded every entry
+    point per file, ignoring --strict-plugins and warning twice)."""
+    import retarget.registry.loader as loader
+    from retarget.cli.main import main
+
+    folder = _clips_dir(tmp_path)
+    calls = []
+    original = loader.load_plugins
+
+    def counting(*args, **kwargs):
+        calls.append(1)
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(loader, "load_plugins", counting)
+    import retarget.cli.main as cli_main
+
+    monkeypatch.setattr(cli_main, "load_plugins", counting)
+    assert main(["motion", "inspect", str(folder)]) == 0
+    assert len(calls) == 1
