@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import math
 import shutil
 from pathlib import Path
 
@@ -74,7 +75,9 @@ def main() -> int:
         mine = found.get(args.run) or next(
             (v for k, v in found.items() if resolve_run(k) == run), {}
         )
-        metrics = {f"held-out normal: {kind}": figs for kind, figs in mine.items()}
+        metrics = {f"held-out normal: {kind}": {k: (v if math.isfinite(v) else None)
+                                                for k, v in figs.items()}
+                   for kind, figs in mine.items()}  # fmt: skip
     def kind(comp: str | dict) -> str:
         return comp if isinstance(comp, str) else comp["type"]
 

@@ -40,8 +40,9 @@ class ModelCard(BaseModel):
     env_steps: int
     cpu_hours: float
     teacher: str | None = None
-    metrics: dict[str, dict[str, float]] = Field(
-        default_factory=dict, description="held-out set -> figure -> value"
+    metrics: dict[str, dict[str, float | None]] = Field(
+        default_factory=dict, description="held-out set -> figure -> value (null: undefined, "
+        "e.g. an error over successful runs when none succeeded)",
     )
     notes: str = ""
 

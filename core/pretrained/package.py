@@ -65,7 +65,7 @@ def render(card: ModelCard) -> str:
     ]  # fmt: skip
     for held_out, figures in card.metrics.items():
         lines += [f"## {held_out}", "", "| figure | value |", "|---|---:|"]
-        lines += [f"| {k} | {v:.3g} |" for k, v in figures.items()]
+        lines += [f"| {k} | {'-' if v is None else format(v, '.3g')} |" for k, v in figures.items()]
         lines.append("")
     if card.notes:
         lines += ["## Notes", "", card.notes, ""]

@@ -51,10 +51,10 @@ class EstimatorConfig(PluginConfig):
         0.1, ge=0, le=1, description="chance per controller and sample that it is held still "
         "over the window (tracking lost), so the hands' uncertainty learns to rise then",
     )  # fmt: skip
-    reach_controllers: bool = Field(
+    reach_controllers: bool | None = Field(
         False, description="put the estimate's wrists on the controllers by two-bone IK "
         "(retarget.learn.reach; exact on the average skeleton, but measured worse on the "
-        "character: 6.4 vs 3.1 cm hands on held-out walks)",
+        "character: 6.4 vs 3.1 cm hands on held-out walks); null (older runs) is off",
     )  # fmt: skip
 
 
@@ -129,7 +129,7 @@ class Estimator(Algorithm):
             rot_weight=cfg.rot_weight, contact_weight=cfg.contact_weight,
             scale_range=0.0 if scene_aware else cfg.scale_range, input_noise=cfg.input_noise,
             weight_decay=cfg.weight_decay, lost_controllers=cfg.lost_controllers,
-            reach=cfg.reach_controllers,
+            reach=bool(cfg.reach_controllers),
         )  # fmt: skip
         self.learner = EstimatorLearner(env, settings, generator or torch.Generator())
 
