@@ -42,8 +42,9 @@ def last_row(run: Path) -> dict[str, str]:
     return rows[-1]
 
 
-def keep_state(run: Path, name: str) -> Path:
-    """The run's full training state under ``benchmarks/pretrain/NAME`` (newest checkpoint)."""
+def keep_state(run: Path, name: str, teacher: str | None = None) -> Path:
+    """The run's full training state under ``benchmarks/pretrain/NAME`` (newest checkpoint);
+    a student's lock names its teacher as the shipped model, so it resumes from any checkout."""
     out = HERE / "pretrain" / name
     if out.exists():
         shutil.rmtree(out)
@@ -51,6 +52,10 @@ def keep_state(run: Path, name: str) -> Path:
     for f in (LOCK, "metrics.csv", "train_settings.json"):
         if (run / f).exists():
             shutil.copy2(run / f, out / f)
+    if teacher is not None:
+        lock = yaml.safe_load((out / LOCK).read_text())
+        lock["algorithm"]["teacher"] = teacher
+        (out / LOCK).write_text(yaml.safe_dump(lock, sort_keys=False))
     ckpt = latest_checkpoint(run)
     shutil.copy2(ckpt, out / CHECKPOINTS / ckpt.name)
     return out
@@ -82,7 +87,8 @@ def main() -> int:
         return comp if isinstance(comp, str) else comp["type"]
 
     algorithm, character = kind(lock["algorithm"]), kind(lock["character"])
-    sensors = [kind(s) for s in lock.get("sensors") or []]
+    actor = ((lock.get("env") or {}).get("groups") or {}).get("actor")  # a student's own inputs
+    sensors = [kind(s) for s in lock.get("sensors") or [] if actor is None or kind(s) in actor]
     card = ModelCard(
         name=args.name, summary=args.summary, character=character, sensors=sensors,
         algorithm=algorithm, data=DATA, licence=LICENCE, env_steps=int(float(row["step"])),
@@ -91,7 +97,7 @@ def main() -> int:
         notes=args.notes,
     )  # fmt: skip
     print(package(run, card, teacher=card.teacher))
-    print(keep_state(run, args.name))
+    print(keep_state(run, args.name, card.teacher))
     return 0
 
 
