@@ -146,23 +146,10 @@ def load_motions(
     folder = clip_cache_dir()
     if len(chosen) < 50 or not progress:
         return [read_cached(reader_for(f, formats), f, folder) for f in chosen]
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeRemainingColumn,
-    )
+    from rich.progress import track
 
-    columns = (TextColumn("[bold]motion files"), BarColumn(), MofNCompleteColumn(),
-               TimeRemainingColumn())  # fmt: skip
-    clips = []
-    with Progress(*columns, transient=True) as bar:
-        task = bar.add_task("read", total=len(chosen))
-        for f in chosen:
-            clips.append(read_cached(reader_for(f, formats), f, folder))
-            bar.advance(task)
-    return clips
+    steps = track(chosen, description="motion files", transient=True)
+    return [read_cached(reader_for(f, formats), f, folder) for f in steps]
 
 
 def default_formats() -> dict[str, MotionFormat]:

@@ -27,6 +27,12 @@ def _clips_dir(tmp_path: Path) -> Path:
     return folder
 
 
+def _first_clip(tmp_path: Path):
+    """One written clip, the reader for it, and an empty cache folder."""
+    path = sorted(_clips_dir(tmp_path).iterdir())[0]
+    return path, reader_for(path, default_formats()), tmp_path / "cache"
+
+
 def test_a_tar_gz_and_a_zip_read_as_their_clips(tmp_path: Path) -> None:
     folder = _clips_dir(tmp_path)
     tar_path = tmp_path / "corpus.tar.gz"
@@ -78,10 +84,7 @@ def test_a_broken_archive_names_the_file(tmp_path: Path) -> None:
 
 
 def test_parsed_clips_come_back_from_the_cache_equal(tmp_path: Path) -> None:
-    folder = _clips_dir(tmp_path)
-    path = sorted(folder.iterdir())[0]
-    fmt = reader_for(path, default_formats())
-    cache = tmp_path / "cache"
+    path, fmt, cache = _first_clip(tmp_path)
     first = read_cached(fmt, path, cache)
     assert len(list(cache.rglob("*.npz"))) == 1
     again = read_cached(fmt, path, cache)
@@ -98,10 +101,7 @@ def test_parsed_clips_come_back_from_the_cache_equal(tmp_path: Path) -> None:
 
 
 def test_a_corrupt_cache_entry_is_read_anew(tmp_path: Path) -> None:
-    folder = _clips_dir(tmp_path)
-    path = sorted(folder.iterdir())[0]
-    fmt = reader_for(path, default_formats())
-    cache = tmp_path / "cache"
+    path, fmt, cache = _first_clip(tmp_path)
     first = read_cached(fmt, path, cache)
     (entry,) = cache.rglob("*.npz")
     entry.write_bytes(b"garbage")
