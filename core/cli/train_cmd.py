@@ -54,6 +54,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "teacher: RUN}); the teacher's sensors are added for it, the student's actor keeps "
         "the recipe's own",
     )
+    parser.add_argument(
+        "--expert",
+        metavar="DIR",
+        help="learn from a tracking expert's directory (`retarget expert`) by behaviour "
+        "cloning (algorithm: {type: expert_bc, expert: DIR}); the expert's clips, character "
+        "and physics are used",
+    )
     parser.add_argument("--runs-dir", default="runs", help="where run directories go")
     parser.add_argument(
         "--num-envs", type=count(1, 65536),
@@ -211,10 +218,12 @@ def _train(args: argparse.Namespace, registry: Registry, comm: Comm) -> int:
     if args.steps is None and args.minutes is None and comm.main:
         out.print("no --steps or --minutes given: training until Ctrl-C (checkpoint on exit)")
     given = {"checkpoint_every": args.checkpoint_every, "tensorboard": args.tensorboard}
-    if args.resume and (args.init_from or args.teacher):
+    if args.teacher and args.expert:
+        raise RecipeError("--teacher and --expert are two ways to learn; use one of them")
+    if args.resume and (args.init_from or args.teacher or args.expert):
         raise RecipeError(
             "--resume continues a run with its own weights and recipe; --init-from and "
-            "--teacher start a new one",
+            "--teacher/--expert start a new one",
             hint="use one of them",
         )
     if args.resume:
@@ -239,6 +248,9 @@ def _train(args: argparse.Namespace, registry: Registry, comm: Comm) -> int:
         if args.teacher:
             teacher = json.dumps({"type": "dagger", "teacher": str(args.teacher)})
             flags.append(f"algorithm={teacher}")
+        if args.expert:
+            expert = json.dumps({"type": "expert_bc", "expert": str(Path(args.expert).resolve())})
+            flags.append(f"algorithm={expert}")
         if args.num_envs is not None:
             flags.append(f"env.num_envs={args.num_envs}")
         if args.threads is not None:

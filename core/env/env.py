@@ -289,6 +289,32 @@ class RetargetEnv:
         self.rewards.episode_sums.zero_()
         return self.observe(self._context(torch.zeros(self.num_envs, self.action_dim)))
 
+    def place_state(
+        self,
+        env_ids: torch.Tensor,
+        clip: torch.Tensor,
+        frame: torch.Tensor,
+        qpos: np.ndarray,
+        qvel: np.ndarray,
+        prev_action: torch.Tensor | None = None,
+    ) -> None:
+        """Start ``env_ids`` at reference (clip, frame) in a given physical state instead of
+        the reference pose: a recorded state of a tracking expert (``retarget.expert``), whose
+        actions a student then learns on the states they were planned from. ``qpos``/``qvel``
+        may cover the whole model or the character only (as in :meth:`BatchedSim.reset`);
+        ``prev_action`` is what the expert did the step before. Call :meth:`observe_now`
+        for the observation afterwards."""
+        env_ids = env_ids.long()
+        self._reset_envs(env_ids, clip.long(), frame.long())
+        mocap = None
+        if self._mocap_ids.size:  # the props stay where this episode's placement put them
+            ids = env_ids.numpy()
+            mocap = (self._mocap_ids, self.sim.raw("mocap_pos")[ids][:, self._mocap_ids],
+                     self.sim.raw("mocap_quat")[ids][:, self._mocap_ids])  # fmt: skip
+        self.sim.reset(env_ids.numpy(), qpos, qvel, mocap)
+        if prev_action is not None:
+            self.prev_action[env_ids] = prev_action.float()
+
     def observe_now(self, groups: Sequence[str] | None = None) -> dict[str, torch.Tensor]:
         """The observation (of ``groups``, default all) of the current simulation and
         reference rows, recomputed: a live stream writes its newest device poses into the

@@ -144,3 +144,35 @@ class DaggerConfig(PluginConfig):
         "steps/s, one update of policy lag under a decoupled objective (retarget.learn.overlap)",
     )
     episode_window: int = Field(100, gt=0, description="finished episodes averaged in stats")
+
+
+class ExpertBCConfig(PluginConfig):
+    """Behaviour cloning from a tracking expert; the student network matches PPO's actor so
+    that PPO can fine-tune it with ``--init-from``."""
+
+    expert: str = Field(description="the expert directory `retarget expert --out` wrote")
+    actor_group: str = Field("actor", description="observation group the student reads")
+    rollout_steps: int = Field(32, gt=0, le=10_000, description="steps per env per iteration")
+    learning_rate: float = Field(5e-4, gt=0, le=1)
+    epochs: int = Field(4, gt=0, le=1000, description="passes over the buffer per iteration")
+    minibatch_size: int = Field(2048, gt=0, le=10_000_000, description="samples per step")
+    buffer_rollouts: int = Field(8, ge=1, le=64, description="recent rollouts trained on")
+    demo_share: float = Field(
+        0.5, ge=0, le=1, description="share of replayed windows that are the beam's other "
+        "members (states around the best path) rather than the best path"
+    )
+    max_grad_norm: float = Field(1.0, gt=0)
+    activation: Literal["tanh", "elu", "relu"] = "tanh"
+    actor_hidden: Hidden = (300, 200, 100)
+    obs_clip: float = Field(10.0, gt=0)
+
+    def dagger(self) -> DaggerConfig:
+        """The same settings as the DAgger learner reads them (it is reused for the update)."""
+        return DaggerConfig(
+            teacher="expert", teacher_group=self.actor_group, actor_group=self.actor_group,
+            rollout_steps=self.rollout_steps, learning_rate=self.learning_rate,
+            epochs=self.epochs, minibatch_size=self.minibatch_size,
+            buffer_rollouts=self.buffer_rollouts, max_grad_norm=self.max_grad_norm,
+            activation=self.activation, actor_hidden=self.actor_hidden, obs_clip=self.obs_clip,
+            action_noise=0.0,
+        )

@@ -1,0 +1,14 @@
+"""A tracking expert that needs no training: trajectory optimisation over a reference clip.
+
+:class:`~retarget.expert.beam.BeamTracker` plans PD-target actions in the env's own action
+space with the simulator itself (a sampling beam search over the reference, SAMCON-style);
+:mod:`retarget.expert.store` writes what it found per clip (states, actions, the beam's
+alternative segments and a report) so that policies learn from it by supervised learning
+(``retarget train --expert DIR``). ``retarget expert`` runs it over clips, folders and
+archives, in parallel and resumably.
+"""
+
+from retarget.expert.beam import BeamTracker, Track
+from retarget.expert.config import ExpertConfig
+
+__all__ = ["BeamTracker", "ExpertConfig", "Track"]

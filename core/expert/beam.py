@@ -1,0 +1,232 @@
+"""Beam-search tracking of a reference clip over PD-target actions (SAMCON-style sampling).
+
+Why a beam and not a receding-horizon planner: a fall is decided a second before it shows,
+so a planner that commits to its best guess every step (predictive sampling with an 8-step
+horizon was tried first) falls within 1.5 s on walks. A beam keeps the ``beam`` best states
+after every short segment, each extended by many sampled continuations, and the best path
+is read back at the end: a doomed state is simply outrun by others.
+
+Each sample's action at every control step is
+
+    clip(reference angles ``lead`` frames ahead / scale + offset + gain x angle error, range)
+
+in the env's own action space (``sim.actuation: pd``). The offset is Gaussian, scaled per
+joint by its strength, and correlated over segments (``carry``): balance needs pushes that
+last longer than one segment. All samples step together in one :class:`BatchedSim` of the
+env's own model (MuJoCo's threaded ``Batch``), so the world poses every cost term needs come
+back with the step and no per-sample loop runs in Python.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import torch
+
+from retarget.errors import PluginError
+from retarget.expert.config import ExpertConfig
+from retarget.sim.backend import make_sim
+
+
+@dataclass
+class Track:
+    """What the planner found for one clip; frame 0 is the placed reference pose."""
+
+    clip: str
+    fps: float
+    actions: np.ndarray  # (T-1, nu): action taken at frame t, reaching frame t+1
+    qpos: np.ndarray  # (T, nq) the whole model's (scene joints included)
+    qvel: np.ndarray  # (T, nv)
+    body_pos: np.ndarray  # (T, B, 3) the character's bodies
+    ref_body_pos: np.ndarray  # (T, B, 3) the reference's
+    ref_qpos0: np.ndarray  # the reference pose at frame 0 (checks a replay's library)
+    cpu_seconds: float
+    demos: dict[str, np.ndarray] = field(default_factory=dict)
+    """Beam members other than the best path, one row per (segment, member): their start
+    state (``state_*`` fields of ``BatchedSim.STATE_FIELDS``), ``frame``, ``prev_action``,
+    ``actions`` (rows, segment, nu) and ``steps`` (how many of them are real)."""
+
+    @property
+    def frames(self) -> int:
+        return len(self.qpos)
+
+    @property
+    def motion_seconds(self) -> float:
+        return (self.frames - 1) / self.fps
+
+    def metrics(self, threshold: float = 0.5) -> dict[str, float | bool | None]:
+        """PHC's figures of the best path: success (no frame with a mean body error above
+        ``threshold`` m), root-relative MPJPE and G-MPJPE (mm), CPU-s per motion-second."""
+        err = np.linalg.norm(self.body_pos - self.ref_body_pos, axis=-1)  # (T, B)
+        rel = np.linalg.norm(
+            (self.body_pos - self.body_pos[:, :1]) - (self.ref_body_pos - self.ref_body_pos[:, :1]),
+            axis=-1,
+        )
+        per_frame = err.mean(-1)
+        over = np.flatnonzero(per_frame > threshold)
+        return {
+            "success_clip": bool(over.size == 0),
+            "failed_at_s": float(over[0] / self.fps) if over.size else None,
+            "mpjpe_mm": float(rel[1:].mean() * 1000),
+            "g_mpjpe_mm": float(err[1:].mean() * 1000),
+            "max_body_error_m": float(per_frame.max()),
+            "motion_seconds": self.motion_seconds,
+            "cpu_seconds": self.cpu_seconds,
+            "cpu_s_per_motion_s": self.cpu_seconds / max(self.motion_seconds, 1e-9),
+        }
+
+
+class BeamTracker:
+    """Plans one clip of ``env``'s library at a time (``env`` needs ``sim.actuation: pd``)."""
+
+    def __init__(self, env, config: ExpertConfig | None = None, threads: int = 1) -> None:
+        self.env = env
+        self.config = c = config or ExpertConfig()
+        settings = env.sim.settings
+        if settings.actuation != "pd":
+            raise PluginError(
+                "plans PD targets; this recipe has sim.actuation: torque",
+                plugin="expert", hint="--set sim.actuation=pd (the teacher recipes have it)",
+            )
+        layout = env.layout
+        if layout.nq < 7 or len(layout.actuator_qpos) != layout.nu:
+            raise PluginError("needs a free root and actuators that say which joint they "
+                              "drive (layout.actuator_qpos)", plugin="expert")
+        if c.beam > c.samples:
+            raise ValueError(f"beam {c.beam} is larger than samples {c.samples}")
+        ranges = np.asarray(layout.actuator_ranges, dtype=np.float64).reshape(-1, 2)
+        self._scale = np.maximum(np.abs(ranges).max(axis=1), 1e-6)
+        self._lo = np.clip(ranges[:, 0] / self._scale, -1, 1)
+        self._hi = np.clip(ranges[:, 1] / self._scale, -1, 1)
+        self._aq = np.asarray(layout.actuator_qpos, dtype=np.intp)
+        limits = np.asarray(layout.torque_limits or np.ones(layout.nu), dtype=np.float64)
+        if limits.shape != (layout.nu,) or limits.max() <= 0:
+            limits = np.ones(layout.nu)
+        self._sigma = c.sigma * (limits / limits.max()) ** c.strength_power
+        plan = settings.model_copy(update={"threads": threads, "backend": "mujoco"})
+        self.sim = make_sim(env.sim.model, layout, c.samples, plan)
+        self._fields = self.sim.STATE_FIELDS
+
+    # ------------------------------------------------------------------ helpers
+
+    def _nominal(self, rows: np.ndarray) -> np.ndarray:
+        q = self.env.reference.qpos64[rows][:, self._aq]
+        return np.clip(q / self._scale, self._lo, self._hi)
+
+    def _cost(self, row: int) -> np.ndarray:
+        ref, w, lay = self.env.reference, self.config.weights, self.env.layout
+        s = self.sim.state
+        bp, rb = s.body_pos.numpy(), ref.arrays["body_pos"][row].numpy()
+        body = np.linalg.norm(bp - rb, axis=-1).mean(-1)
+        pose = np.linalg.norm((bp - bp[:, :1]) - (rb - rb[:1]), axis=-1).mean(-1)
+        q = self.sim.raw("qpos")[:, : lay.nq]
+        v = self.sim.raw("qvel")[:, : lay.nv]
+        rq, rv = ref.qpos64[row], ref.qvel64[row]
+        dot = np.minimum(np.abs(q[:, 3:7] @ rq[3:7]), 1.0)
+        cost = (
+            w.body * body
+            + w.orientation * (1.0 - dot**2)
+            + w.joints * np.square(q[:, 7:] - rq[7:]).mean(-1)
+            + w.height * 10.0 * np.square(q[:, 2] - rq[2])
+            + w.velocity * np.square(v - rv).mean(-1)
+            + w.pose * pose
+        )
+        return np.where(np.isfinite(cost), cost, np.inf)
+
+    # ------------------------------------------------------------------ planning
+
+    def track(
+        self,
+        clip: int,
+        seconds: float | None = None,
+        progress: Callable[[int], None] | None = None,
+    ) -> Track:
+        """Plan clip ``clip`` (library index) from its first frame for ``seconds`` (all of
+        it when None); ``progress(frames)`` is called after every segment."""
+        c, env = self.config, self.env
+        cpu0 = time.process_time()
+        rng = np.random.default_rng([c.seed, clip])
+        lib = env.library
+        start, length = int(lib.start[clip]), int(lib.length[clip])
+        fps = 1.0 / env.sim.settings.control_dt
+        if seconds is not None:
+            length = max(2, min(length, round(seconds * fps) + 1))
+        env.place(torch.tensor([clip]), torch.tensor([0]))
+        beam = {k: v.copy() for k, v in env.sim.state_dict().items()}
+        first = {
+            "qpos": env.sim.raw("qpos")[0].copy(),
+            "qvel": env.sim.raw("qvel")[0].copy(),
+            "body": env.sim.state.body_pos[0].numpy().astype(np.float64),
+        }
+        nu, K = env.layout.nu, c.samples
+        offset = np.zeros((1, nu))
+        last = np.zeros((1, nu))
+        segments: list[dict[str, np.ndarray]] = []
+        demos: dict[str, list[np.ndarray]] = {}
+        f = 0
+        while f < length - 1:
+            S = min(c.segment, length - 1 - f)
+            rows = start + f + 1 + np.arange(S)
+            nominal = self._nominal(np.minimum(rows + c.lead, start + length - 1))
+            B = len(offset)
+            parent = rng.integers(0, B, K)
+            parent[: min(B, K)] = np.arange(min(B, K))
+            off = c.carry * offset[parent] + rng.normal(size=(K, nu)) * self._sigma
+            self.sim.load_state_dict({k: v[parent] for k, v in beam.items()})
+            acts = np.zeros((K, S, nu))
+            qpos = np.zeros((K, S, self.sim.raw("qpos").shape[1]))
+            qvel = np.zeros((K, S, self.sim.raw("qvel").shape[1]))
+            body = np.zeros((K, S, *self.sim.state.body_pos.shape[1:]))
+            bad = np.zeros(K, dtype=bool)
+            ref_q = env.reference.qpos64
+            for j in range(S):
+                angles = self.sim.raw("qpos")[:, self._aq]
+                fb = c.gain * (ref_q[rows[j]][self._aq][None] - angles) / self._scale
+                acts[:, j] = np.clip(nominal[j][None] + off + fb, self._lo, self._hi)
+                bad |= self.sim.step(acts[:, j])
+                qpos[:, j], qvel[:, j] = self.sim.raw("qpos"), self.sim.raw("qvel")
+                body[:, j] = self.sim.state.body_pos.numpy()
+            cost = self._cost(rows[-1].item())
+            cost[bad] = np.inf
+            order = np.argsort(cost, kind="stable")[: c.beam]
+            if c.keep:
+                kept = order[: c.keep]
+                for k, v in beam.items():
+                    demos.setdefault(f"state_{k}", []).append(v[parent[kept]])
+                demos.setdefault("frame", []).append(np.full(len(kept), f))
+                demos.setdefault("prev_action", []).append(last[parent[kept]])
+                padded = np.zeros((len(kept), c.segment, nu))
+                padded[:, :S] = acts[kept]
+                demos.setdefault("actions", []).append(padded)
+                demos.setdefault("steps", []).append(np.full(len(kept), S))
+            segments.append({"parent": parent[order], "acts": acts[order], "qpos": qpos[order],
+                             "qvel": qvel[order], "body": body[order]})
+            beam = {k: v[order].copy() for k, v in self.sim.state_dict().items()}
+            offset, last = off[order], acts[order, -1]
+            f += S
+            if progress is not None:
+                progress(S)
+        # read the best path back, last segment first
+        idx = 0
+        parts: dict[str, list[np.ndarray]] = {"acts": [], "qpos": [], "qvel": [], "body": []}
+        for seg in reversed(segments):
+            for k in parts:
+                parts[k].append(seg[k][idx])
+            idx = int(seg["parent"][idx])
+        path = {k: np.concatenate(v[::-1], axis=0) for k, v in parts.items()}
+        frames = start + np.arange(length)
+        return Track(
+            clip=lib.names[clip],
+            fps=fps,
+            actions=path["acts"].astype(np.float32),
+            qpos=np.concatenate([first["qpos"][None], path["qpos"]]),
+            qvel=np.concatenate([first["qvel"][None], path["qvel"]]),
+            body_pos=np.concatenate([first["body"][None], path["body"]]).astype(np.float32),
+            ref_body_pos=env.reference.arrays["body_pos"][frames].numpy(),
+            ref_qpos0=env.reference.qpos64[start].copy(),
+            cpu_seconds=time.process_time() - cpu0,
+            demos={k: np.concatenate(v) for k, v in demos.items()},
+        )

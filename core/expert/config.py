@@ -1,0 +1,43 @@
+"""The planner's settings (``retarget expert --set planner.FIELD=VALUE``)."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class CostWeights(BaseModel):
+    """Weights of the segment-end cost, each term a distance to the reference frame."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    body: float = Field(10.0, ge=0, description="mean world distance of the bodies (m)")
+    orientation: float = Field(5.0, ge=0, description="root orientation, 1 - cos^2(angle/2)")
+    joints: float = Field(2.0, ge=0, description="mean squared joint-angle error (rad^2)")
+    height: float = Field(5.0, ge=0, description="squared root-height error (m^2) x 10")
+    velocity: float = Field(0.05, ge=0, description="mean squared qvel error")
+    pose: float = Field(0.0, ge=0, description="mean root-relative distance of the bodies (m)")
+
+
+class ExpertConfig(BaseModel):
+    """Beam-search tracking over PD targets; the defaults were chosen on training-style walks
+    (``benchmarks/results/expert_*.md`` has the comparisons)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    samples: int = Field(1024, ge=2, le=65_536, description="rollouts per segment")
+    beam: int = Field(128, ge=1, le=4096, description="states kept after each segment")
+    segment: int = Field(3, ge=1, le=36, description="control steps per segment")
+    sigma: float = Field(0.2, ge=0, le=2, description="offset noise (action units) of the "
+                         "strongest joint; weaker joints get less (strength_power)")
+    strength_power: float = Field(1.0, ge=0, le=4, description="noise of a joint scales as "
+                                  "(its torque limit / the largest)^power")
+    carry: float = Field(0.8, ge=0, lt=1, description="share of the parent's offset a "
+                         "sample keeps (correlated offsets over segments)")
+    gain: float = Field(1.0, ge=0, le=10, description="feedback added to every action: gain "
+                        "x (reference angle - current angle), in action units")
+    lead: int = Field(1, ge=0, le=10, description="the nominal targets are this many frames "
+                      "ahead of the frame being reached (PD servos lag)")
+    keep: int = Field(16, ge=0, le=4096, description="beam members per segment saved as "
+                      "extra demonstrations (states around the best path)")
+    seed: int = Field(0, ge=0)
+    weights: CostWeights = Field(default_factory=CostWeights)

@@ -1,0 +1,136 @@
+"""Behaviour cloning from a tracking expert as an algorithm plugin.
+
+``retarget train --sensors three_point --expert DIR`` (``algorithm: {type: expert_bc,
+expert: DIR}``): before the run starts, :meth:`ExpertBC.prepare_recipe` reads
+``DIR/expert.json`` and gives the run the expert's clips (``DIR/motions``), scene and physics
+(control rate, substeps, PD actuation and gains: the expert's actions mean nothing under
+other physics); another character is refused. The student's own sensors stay as the recipe
+says, so the locked recipe states exactly what ran and the run evaluates, resumes and exports
+without the expert directory's planner.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+import retarget
+from retarget import Algorithm, PluginError, RecipeError, VecEnv
+from retarget.learn.config import ExpertBCConfig
+
+if TYPE_CHECKING:
+    import torch
+
+    from retarget.learn.expert_bc import ExpertBCLearner
+
+PHYSICS = ("control_hz", "substeps", "actuation", "pd_saturation", "pd_damping")
+
+
+class ExpertBC(Algorithm):
+    """A student learns a tracking expert's actions on the expert's replayed states."""
+
+    name = "expert_bc"
+    Config = ExpertBCConfig
+
+    def __init__(self, config: ExpertBCConfig | None = None) -> None:
+        super().__init__(config)
+        self.learner: ExpertBCLearner | None = None
+
+    @classmethod
+    def example(cls) -> ExpertBC:
+        raise NotImplementedError("expert_bc needs an expert directory (retarget expert)")
+
+    def prepare_recipe(self, recipe: dict[str, Any], registry: Any) -> dict[str, Any]:
+        from retarget.expert.store import read_header
+        c = self.config
+        assert isinstance(c, ExpertBCConfig)
+        root = Path(c.expert).resolve()
+        header = read_header(root)
+        theirs = header["recipe"]
+
+        def kind(r: Mapping[str, Any]) -> Any:
+            ch = r.get("character")
+            return ch.get("type") if isinstance(ch, dict) else ch
+
+        if kind(recipe) != kind(theirs):
+            raise RecipeError(
+                f"the expert planned character {kind(theirs)!r}, this recipe has "
+                f"{kind(recipe)!r}", file=str(root / "expert.json"), field="character",
+                hint=f"--character {kind(theirs)}",
+            )
+        recipe = dict(recipe)
+        recipe["character"] = theirs["character"]
+        recipe["scene"] = theirs.get("scene")
+        sim = dict(recipe.get("sim") or {})
+        for key in PHYSICS:
+            if key in (theirs.get("sim") or {}):
+                sim[key] = theirs["sim"][key]
+        recipe["sim"] = sim
+        recipe["motions"] = {"path": str(root / "motions")}
+        algorithm = dict(recipe["algorithm"])
+        algorithm["expert"] = str(root)
+        recipe["algorithm"] = algorithm
+        return recipe
+
+    def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
+        from retarget.expert.store import load_track
+        from retarget.learn.expert_bc import ExpertBCLearner, ExpertWindows
+        c = self.config
+        assert isinstance(c, ExpertBCConfig)
+        if not hasattr(env, "place_state") or not hasattr(env, "library"):
+            raise PluginError("needs a retarget environment (place_state, library)",
+                              plugin=self.name)
+        root = Path(c.expert)
+        sim = env.sim  # type: ignore[attr-defined]
+        shapes = {k: tuple(sim.raw(k).shape[1:]) for k in sim.STATE_FIELDS}
+        nq, nv = shapes["qpos"][0], shapes["qvel"][0]
+        lib, ref = env.library, env.reference  # type: ignore[attr-defined]
+        clips = []
+        for i, name in enumerate(lib.names):
+            file = root / "clips" / f"{name}.npz"
+            if not file.exists():
+                raise PluginError(f"the expert has not planned clip {name!r} ({file})",
+                                  plugin=self.name, hint="run `retarget expert` on it first")
+            data = load_track(file, nq=nq, nv=nv, nu=env.action_dim, state_shapes=shapes)
+            start = int(lib.start[i])
+            if len(data["qpos"]) > int(lib.length[i]) or not np.allclose(
+                data["ref_qpos0"], ref.qpos64[start], atol=1e-4
+            ):
+                raise PluginError(f"clip {name!r} is not the clip the expert planned",
+                                  plugin=self.name, hint=str(file))
+            clips.append(data)
+        windows = ExpertWindows(clips, sim.STATE_FIELDS)
+        try:
+            self.learner = ExpertBCLearner(c.dagger(), env.obs_dims, env.action_dim,
+                                           env.num_envs, windows, c.demo_share, generator)
+        except ValueError as exc:
+            raise PluginError(str(exc), plugin=self.name) from None
+
+    def _ready(self) -> ExpertBCLearner:
+        if self.learner is None:
+            raise RuntimeError("expert_bc: setup(env) must be called first")
+        return self.learner
+
+    def train_iteration(self, env: VecEnv) -> dict[str, float]:
+        return self._ready().train_iteration(env)
+
+    def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
+        return self._ready().act(obs)
+
+    def policy(self) -> tuple[str, torch.nn.Module]:
+        learner = self._ready()
+        return learner.actor_key, learner.deployable_policy()
+
+    def state_dict(self) -> dict[str, Any]:
+        return self._ready().state_dict()
+
+    def load_state_dict(self, state: Mapping[str, Any]) -> None:
+        self._ready().load_state_dict(state)
+
+
+@retarget.hookimpl
+def register_algorithms(register) -> None:
+    register(ExpertBC)

@@ -1,0 +1,137 @@
+"""The tracking expert: real MuJoCo planning, its files, `retarget expert` and cloning it."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from retarget.env.build import env_from_recipe
+from retarget.errors import PluginError, RecipeError
+from retarget.expert import BeamTracker, ExpertConfig
+from retarget.expert.store import load_track, write_track
+from retarget.motion.bvh_write import write_bvh
+from retarget.motion.procedural import idle_clip
+from retarget.recipe import load
+from retarget.registry.loader import load_plugins
+from retarget.train.checkpoint import load_checkpoint
+
+SMALL = {"samples": 48, "beam": 6, "keep": 3}
+
+
+@pytest.fixture(scope="module")
+def registry():
+    return load_plugins()
+
+
+@pytest.fixture(scope="module")
+def clip_file(tmp_path_factory) -> Path:
+    return write_bvh(idle_clip(1.5), tmp_path_factory.mktemp("clips") / "idle.bvh")
+
+
+def _env(registry, clip_file: Path, *sets: str):
+    recipe = load("teacher", registry, shorthands={"motions": str(clip_file)},
+                  assignments=["env.num_envs=1", *sets])  # fmt: skip
+    return env_from_recipe(recipe, registry=registry, threads=1)
+
+
+@pytest.fixture(scope="module")
+def track(registry, clip_file):
+    env = _env(registry, clip_file)
+    return env, BeamTracker(env, ExpertConfig(**SMALL)).track(0, seconds=1.0)
+
+
+def test_tracks_a_clip_it_never_saw(track) -> None:
+    _, tr = track
+    m = tr.metrics()
+    assert tr.frames == 37 and tr.actions.shape == (36, tr.actions.shape[1])
+    assert m["success_clip"] and m["g_mpjpe_mm"] < 120, m
+    assert m["cpu_seconds"] > 0 and m["cpu_s_per_motion_s"] > 0
+    assert len(tr.demos["frame"]) == 12 * 3  # 12 segments x 3 kept members
+
+
+def test_its_actions_replay_to_its_states_in_the_env(track) -> None:
+    """The plan is physically consistent: the env itself, stepped with the plan's actions
+    from the placed frame, goes through the plan's states."""
+    env, tr = track
+    env.place(torch.tensor([0]), torch.tensor([0]))
+    for t, action in enumerate(tr.actions[:18]):
+        env.step_physics(torch.from_numpy(action[None]))
+        np.testing.assert_allclose(env.sim.raw("qpos")[0], tr.qpos[t + 1], atol=1e-5)
+
+
+def test_refuses_torque_actuation(registry, clip_file) -> None:
+    env = _env(registry, clip_file, "sim.actuation=torque")
+    with pytest.raises(PluginError, match="actuation"):
+        BeamTracker(env, ExpertConfig(**SMALL))
+
+
+def _shapes(env):
+    sim = env.sim
+    s = {k: tuple(sim.raw(k).shape[1:]) for k in sim.STATE_FIELDS}
+    return {"nq": s["qpos"][0], "nv": s["qvel"][0], "nu": env.action_dim, "state_shapes": s}
+
+
+def test_files_round_trip_and_hostile_ones_are_refused(track, tmp_path) -> None:
+    env, tr = track
+    (tmp_path / "clips").mkdir()
+    figures = write_track(tmp_path, "idle", tr, {"key": "k"})
+    assert figures["success_clip"] and (tmp_path / "clips" / "idle.json").exists()
+    data = load_track(tmp_path / "clips" / "idle.npz", **_shapes(env))
+    np.testing.assert_array_equal(data["actions"], tr.actions)
+    good = dict(data)
+    for why, change in {
+        "shape": {"actions": good["actions"][:, :3]},
+        "non-finite": {"qpos": np.full_like(good["qpos"], np.nan)},
+        "outside": {"demo_frame": good["demo_frame"] + 10_000},
+    }.items():
+        bad = tmp_path / f"{why}.npz"
+        np.savez(bad, **{**good, **change})
+        with pytest.raises(RecipeError, match="refused") as info:
+            load_track(bad, **_shapes(env))
+        assert str(bad) in str(info.value)
+    pickled = tmp_path / "pickled.npz"
+    np.savez(pickled, **{**good, "qpos": np.array([object()], dtype=object)})
+    with pytest.raises(RecipeError, match="refused"):
+        load_track(pickled, **_shapes(env))
+
+
+def _cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "retarget", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=600)  # fmt: skip
+
+
+def test_cli_plans_resumes_and_a_student_clones_it(clip_file, tmp_path) -> None:
+    out = tmp_path / "expert"
+    small = [f"--planner={k}={v}" for k, v in SMALL.items()]
+    first = _cli("expert", str(clip_file), "--out", str(out), "--seconds", "0.5", *small,
+                 cwd=tmp_path)  # fmt: skip
+    assert first.returncode == 0, first.stderr
+    report = json.loads((out / "report.json").read_text())
+    assert report["summary"]["clips"] == 1 and "idle" in report["clips"]
+    assert "success_clip=1.000" in first.stdout
+    again = _cli("expert", str(clip_file), "--out", str(out), "--seconds", "0.5", *small,
+                 cwd=tmp_path)  # fmt: skip
+    assert again.returncode == 0 and "1 planned before, 0 to plan" in again.stderr
+    other = _cli("expert", str(clip_file), "--out", str(out), "--planner", "samples=64",
+                 cwd=tmp_path)  # fmt: skip
+    assert other.returncode != 0 and "expert.json" in other.stderr
+    runs = tmp_path / "runs"
+    train = _cli("train", "--sensors", "three_point", "--expert", str(out), "--steps", "512",
+                 "--num-envs", "8", "--threads", "1", "--runs-dir", str(runs), cwd=tmp_path)
+    assert train.returncode == 0, train.stderr + train.stdout
+    run = next(runs.glob("*/latest"))
+    lock = (run / "recipe.lock.yaml").read_text()
+    assert "type: expert_bc" in lock and "actuation: pd" in lock
+    assert str(out / "motions") in lock
+    ckpt = sorted((run / "checkpoints").glob("ckpt-*.pt"))[-1]
+    state = load_checkpoint(ckpt)
+    assert state["algorithm"]["env_steps"] >= 512
+    dino = _cli("train", "--character", "dino", "--expert", str(out), "--steps", "64",
+                "--runs-dir", str(runs), cwd=tmp_path)  # fmt: skip
+    assert dino.returncode != 0 and "--character human" in dino.stderr + dino.stdout
