@@ -174,7 +174,9 @@ class BeamTracker:
             B = len(offset)
             parent = rng.integers(0, B, K)
             parent[: min(B, K)] = np.arange(min(B, K))
-            off = c.carry * offset[parent] + rng.normal(size=(K, nu)) * self._sigma
+            noise = rng.normal(size=(K, nu)) * self._sigma
+            noise[rng.random(K) < c.quiet] = 0.0
+            off = c.carry * offset[parent] + noise
             self.sim.load_state_dict({k: v[parent] for k, v in beam.items()})
             acts = np.zeros((K, S, nu))
             qpos = np.zeros((K, S, self.sim.raw("qpos").shape[1]))
@@ -189,7 +191,19 @@ class BeamTracker:
                 bad |= self.sim.step(acts[:, j])
                 qpos[:, j], qvel[:, j] = self.sim.raw("qpos"), self.sim.raw("qvel")
                 body[:, j] = self.sim.state.body_pos.numpy()
-            cost = self._cost(rows[-1].item())
+            end_state = self.sim.state_dict()
+            last_row = start + length - 1
+            scored = rows[-1].item()
+            for h in range(c.lookahead):
+                row = min(scored + 1, last_row)
+                if row == scored:
+                    break
+                angles = self.sim.raw("qpos")[:, self._aq]
+                fb = c.gain * (ref_q[row][self._aq][None] - angles) / self._scale
+                target = self._nominal(np.array([min(row + c.lead, last_row)]))[0]
+                bad |= self.sim.step(np.clip(target[None] + off + fb, self._lo, self._hi))
+                scored = row
+            cost = self._cost(scored) + c.weights.effort * np.square(off).mean(-1)
             cost[bad] = np.inf
             order = np.argsort(cost, kind="stable")[: c.beam]
             if c.keep:
@@ -204,7 +218,7 @@ class BeamTracker:
                 demos.setdefault("steps", []).append(np.full(len(kept), S))
             segments.append({"parent": parent[order], "acts": acts[order], "qpos": qpos[order],
                              "qvel": qvel[order], "body": body[order]})
-            beam = {k: v[order].copy() for k, v in self.sim.state_dict().items()}
+            beam = {k: v[order].copy() for k, v in end_state.items()}
             offset, last = off[order], acts[order, -1]
             f += S
             if progress is not None:

@@ -15,6 +15,8 @@ class CostWeights(BaseModel):
     joints: float = Field(2.0, ge=0, description="mean squared joint-angle error (rad^2)")
     height: float = Field(5.0, ge=0, description="squared root-height error (m^2) x 10")
     velocity: float = Field(0.05, ge=0, description="mean squared qvel error")
+    effort: float = Field(0.0, ge=0, description="mean squared offset from the nominal "
+                          "targets (action units): prefers the quietest plan that tracks")
     pose: float = Field(0.0, ge=0, description="mean root-relative distance of the bodies (m)")
 
 
@@ -24,8 +26,8 @@ class ExpertConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
-    samples: int = Field(1024, ge=2, le=65_536, description="rollouts per segment")
-    beam: int = Field(128, ge=1, le=4096, description="states kept after each segment")
+    samples: int = Field(512, ge=2, le=65_536, description="rollouts per segment")
+    beam: int = Field(64, ge=1, le=4096, description="states kept after each segment")
     segment: int = Field(3, ge=1, le=36, description="control steps per segment")
     sigma: float = Field(0.2, ge=0, le=2, description="offset noise (action units) of the "
                          "strongest joint; weaker joints get less (strength_power)")
@@ -33,6 +35,11 @@ class ExpertConfig(BaseModel):
                                   "(its torque limit / the largest)^power")
     carry: float = Field(0.8, ge=0, lt=1, description="share of the parent's offset a "
                          "sample keeps (correlated offsets over segments)")
+    lookahead: int = Field(6, ge=0, le=72, description="control steps each sample is "
+                           "continued past its segment (same offset) before it is scored: a "
+                           "state that is about to fall scores badly before it falls")
+    quiet: float = Field(0.0, ge=0, le=1, description="share of samples that add no new "
+                         "noise to their parent's (decayed) offset")
     gain: float = Field(1.0, ge=0, le=10, description="feedback added to every action: gain "
                         "x (reference angle - current angle), in action units")
     lead: int = Field(1, ge=0, le=10, description="the nominal targets are this many frames "
