@@ -194,7 +194,7 @@ class BeamTracker:
             end_state = self.sim.state_dict()
             last_row = start + length - 1
             scored = rows[-1].item()
-            for h in range(c.lookahead):
+            for _ in range(c.lookahead):
                 row = min(scored + 1, last_row)
                 if row == scored:
                     break
