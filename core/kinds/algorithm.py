@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 
 from retarget.errors import PluginError
 from retarget.kinds.base import Plugin
-from retarget.train.distributed import SINGLE, Comm
+from retarget.kinds.comm import SINGLE, Comm
 
 if TYPE_CHECKING:
     import torch

@@ -15,8 +15,9 @@ if TYPE_CHECKING:
     from retarget.learn.config import PPOConfig
     from retarget.learn.networks import Critic, GaussianActor, mlp
     from retarget.learn.normalizer import GroupNormalizer, RunningNormalizer
-    from retarget.learn.ppo import PPOLearner, torch_threads
+    from retarget.learn.ppo import PPOLearner
     from retarget.learn.storage import RolloutStorage, gae
+    from retarget.learn.threads import torch_threads
 
 __getattr__ = lazy_exports(
     __name__,
@@ -30,7 +31,7 @@ __getattr__ = lazy_exports(
         "GroupNormalizer": "retarget.learn.normalizer",
         "RunningNormalizer": "retarget.learn.normalizer",
         "PPOLearner": "retarget.learn.ppo",
-        "torch_threads": "retarget.learn.ppo",
+        "torch_threads": "retarget.learn.threads",
         "RolloutStorage": "retarget.learn.storage",
         "gae": "retarget.learn.storage",
     },

@@ -23,13 +23,14 @@ import torch
 from torch import nn
 
 from retarget.kinds import VecEnv
+from retarget.kinds.comm import SINGLE, Comm
 from retarget.learn.columns import ImageInput
 from retarget.learn.config import DaggerConfig
 from retarget.learn.episodes import EpisodeTracker, clone_obs
 from retarget.learn.networks import GaussianActor
 from retarget.learn.normalizer import GroupNormalizer
-from retarget.learn.ppo import DeployedPolicy, torch_threads
-from retarget.train.distributed import SINGLE, Comm
+from retarget.learn.ppo import DeployedPolicy
+from retarget.learn.threads import torch_threads
 
 
 class DaggerLearner:

@@ -16,7 +16,7 @@ import torch
 from torch import nn
 
 if TYPE_CHECKING:
-    from retarget.train.distributed import Comm
+    from retarget.kinds.comm import Comm
 
 
 class RunningNormalizer(nn.Module):

@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 import torch
 
 from retarget.learn.storage import RolloutStorage
+from retarget.learn.threads import torch_threads
 
 if TYPE_CHECKING:
     from retarget.kinds import VecEnv
@@ -74,7 +75,6 @@ class OverlapState:
     def iteration(self, env: VecEnv) -> dict[str, float]:
         """Update on the waiting rollout while collecting the next; the first iteration of a
         run (or of a resume without a waiting rollout) collects one to start with."""
-        from retarget.learn.ppo import torch_threads
 
         ppo, c = self.learner, self.learner.config
         samples = c.rollout_steps * ppo.num_envs

@@ -20,13 +20,13 @@ from __future__ import annotations
 import copy
 import time
 from collections.abc import Mapping, Sequence
-from contextlib import contextmanager
 from typing import Any
 
 import torch
 from torch import nn
 
 from retarget.kinds import VecEnv
+from retarget.kinds.comm import SINGLE, Comm
 from retarget.learn.columns import ImageInput
 from retarget.learn.config import PPOConfig
 from retarget.learn.episodes import EpisodeTracker, clone_obs
@@ -34,21 +34,8 @@ from retarget.learn.networks import Critic, GaussianActor
 from retarget.learn.normalizer import GroupNormalizer, RunningNormalizer
 from retarget.learn.overlap import OverlapState
 from retarget.learn.storage import RolloutStorage
+from retarget.learn.threads import torch_threads
 from retarget.learn.widen import sub_state, widen_module, widen_normalizer
-from retarget.train.distributed import SINGLE, Comm
-
-
-@contextmanager
-def torch_threads(count: int):
-    """Run a block with ``count`` intra-op threads (0: unchanged), then restore."""
-    previous = torch.get_num_threads()
-    if count and count != previous:
-        torch.set_num_threads(count)
-    try:
-        yield
-    finally:
-        if torch.get_num_threads() != previous:
-            torch.set_num_threads(previous)
 
 
 class DeployedPolicy(nn.Module):
