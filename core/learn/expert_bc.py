@@ -82,6 +82,8 @@ class ExpertBCLearner(DaggerLearner):
         for i, w in zip(ids, drawn, strict=True):
             w["at"] = 0
             self.cursor[i] = w
+        if not hasattr(env, "place_state"):  # a plain VecEnv: stepped from where it is
+            return
         env.place_state(
             torch.tensor(ids),
             torch.tensor([w["clip"] for w in drawn]),
@@ -102,7 +104,12 @@ class ExpertBCLearner(DaggerLearner):
                      if w is None or w["at"] >= len(w["actions"])]  # fmt: skip
             if stale:
                 self._place(env, stale)
-            obs = env.observe_now([key])[key].float()
+            if hasattr(env, "observe_now"):
+                obs = env.observe_now([key])[key].float()
+            else:
+                if self.last_obs is None:
+                    self.last_obs = {k: v.float() for k, v in env.reset().items()}
+                obs = self.last_obs[key]
             label = torch.from_numpy(np.stack(
                 [w["actions"][w["at"]] for w in self.cursor])).float()  # fmt: skip
             if int(self.obs_norm.groups[key].count) == 0:  # the first batch sets the scale
@@ -111,7 +118,8 @@ class ExpertBCLearner(DaggerLearner):
                 pending_rows.append(obs)
             gap += float((self.actor(self._normalized(obs)).clamp(-1, 1) - label).square().mean())
             self._store(obs, label)
-            _, reward, terminated, truncated, _ = env.step(label)
+            next_obs, reward, terminated, truncated, _ = env.step(label)
+            self.last_obs = {k: v.float() for k, v in next_obs.items()}
             ended = (terminated.bool() | truncated.bool()).tolist()
             self.episodes.step(reward.float(), terminated.bool() | truncated.bool())
             for i, w in enumerate(self.cursor):

@@ -38,6 +38,8 @@ TOOLKIT: dict[str, str] = {
     "retarget.motion.position_layouts": "joint-name layouts of position-only captures",
     "retarget.motion.bvh_write": "writing clips as BVH",
     "retarget.motion.scene_fit": "fitting props to where a clip sits and steps",
+    "retarget.expert.*": "the tracking expert (beam-search planner) and its files, for planners "
+    "and students that learn from it",
     "retarget.learn.*": "building blocks of algorithm plugins (networks, PPO, DAgger, ...)",
     "retarget.env": "the tracking environment (``RetargetEnv``, ``random_actions``)",
     "retarget.env.build": "building an environment from a resolved recipe",

@@ -35,13 +35,27 @@ class ExpertBC(Algorithm):
     name = "expert_bc"
     Config = ExpertBCConfig
 
-    def __init__(self, config: ExpertBCConfig | None = None) -> None:
+    def __init__(self, config: ExpertBCConfig | None = None, windows: Any = None) -> None:
+        """``windows``: replay these ``ExpertWindows`` instead of the configured directory
+        (tests, the contract suite's example)."""
         super().__init__(config)
         self.learner: ExpertBCLearner | None = None
+        self._windows = windows
 
     @classmethod
     def example(cls) -> ExpertBC:
-        raise NotImplementedError("expert_bc needs an expert directory (retarget expert)")
+        """Replays a synthetic expert of zero actions (no directory): an environment without
+        ``place_state`` is stepped from wherever it is."""
+        from retarget.learn.expert_bc import ExpertWindows
+
+        def windows(action_dim: int) -> ExpertWindows:
+            clip = {"qpos": np.zeros((10, 1)), "qvel": np.zeros((10, 1)),
+                    "actions": np.zeros((9, action_dim), np.float32),
+                    "demo_frame": np.zeros(0, int)}  # fmt: skip
+            return ExpertWindows([clip], ())
+
+        return cls(ExpertBCConfig(expert="example", rollout_steps=8, minibatch_size=16),
+                   windows=windows)  # fmt: skip
 
     def prepare_recipe(self, recipe: dict[str, Any], registry: Any) -> dict[str, Any]:
         from retarget.expert.store import read_header
@@ -80,6 +94,11 @@ class ExpertBC(Algorithm):
         from retarget.learn.expert_bc import ExpertBCLearner, ExpertWindows
         c = self.config
         assert isinstance(c, ExpertBCConfig)
+        if self._windows is not None:
+            self.learner = ExpertBCLearner(c.dagger(), env.obs_dims, env.action_dim,
+                                           env.num_envs, self._windows(env.action_dim),
+                                           c.demo_share, generator)  # fmt: skip
+            return
         if not hasattr(env, "place_state") or not hasattr(env, "library"):
             raise PluginError("needs a retarget environment (place_state, library)",
                               plugin=self.name)

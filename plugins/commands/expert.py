@@ -43,11 +43,11 @@ def plan_clip(job: dict[str, Any]) -> dict[str, Any]:
     """Plan one clip (runs in a worker process too): build its env, track, write."""
     import torch
 
+    from retarget import load_plugins
     from retarget.env.build import env_from_recipe
     from retarget.expert import BeamTracker, ExpertConfig
     from retarget.expert.store import write_track
     from retarget.recipe import load
-    from retarget.registry.loader import load_plugins
 
     torch.set_num_threads(1)
     registry = job.get("registry") or load_plugins(strict=False)

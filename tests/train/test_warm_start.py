@@ -98,7 +98,8 @@ def test_cli_init_from_records_the_source_and_refuses_other_networks(
     assert rc != 0 and "cannot start from" in err and "actor_hidden" in err
 
     rc = main(["train", "--resume", str(run), "--init-from", str(flat_run)])
-    assert rc != 0 and "--init-from and --teacher/--expert start a new one" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert rc != 0 and "--init-from and --teacher/--expert start a new one" in err
 
 
 def test_new_inputs_learn_their_scale_while_kept_ones_stay() -> None:
