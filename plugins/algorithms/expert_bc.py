@@ -15,8 +15,6 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 import retarget
 from retarget import Algorithm, PluginError, RecipeError, VecEnv
 from retarget.learn.config import ExpertBCConfig
@@ -46,6 +44,8 @@ class ExpertBC(Algorithm):
     def example(cls) -> ExpertBC:
         """Replays a synthetic expert of zero actions (no directory): an environment without
         ``place_state`` is stepped from wherever it is."""
+        import numpy as np
+
         from retarget.learn.expert_bc import ExpertWindows
 
         def windows(action_dim: int) -> ExpertWindows:
@@ -90,6 +90,8 @@ class ExpertBC(Algorithm):
         return recipe
 
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
+        import numpy as np
+
         from retarget.expert.store import load_track
         from retarget.learn.expert_bc import ExpertBCLearner, ExpertWindows
         c = self.config
