@@ -67,7 +67,7 @@ class ExpertBCLearner(DaggerLearner):
     distilled one)."""
 
     def __init__(self, config: DaggerConfig, obs_dims: Mapping[str, int], action_dim: int,
-                 num_envs: int, windows: ExpertWindows, demo_share: float,
+                 num_envs: int, windows: ExpertWindows | None, demo_share: float,
                  generator: torch.Generator | None = None) -> None:  # fmt: skip
         super().__init__(config, obs_dims, action_dim, num_envs, generator)
         self.windows = windows
@@ -78,6 +78,8 @@ class ExpertBCLearner(DaggerLearner):
         self.teacher = torch.nn.Identity()  # labels come from the replay
 
     def _place(self, env: Any, ids: list[int]) -> None:
+        if self.windows is None:
+            raise RuntimeError("ExpertBCLearner.windows must be set before training")
         drawn = self.windows.draw(len(ids), self.rng, self.demo_share, self.config.rollout_steps)
         for i, w in zip(ids, drawn, strict=True):
             w["at"] = 0

@@ -90,10 +90,7 @@ class ExpertBC(Algorithm):
         return recipe
 
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
-        import numpy as np
-
-        from retarget.expert.store import load_track
-        from retarget.learn.expert_bc import ExpertBCLearner, ExpertWindows
+        from retarget.learn.expert_bc import ExpertBCLearner
         c = self.config
         assert isinstance(c, ExpertBCConfig)
         if self._windows is not None:
@@ -101,6 +98,21 @@ class ExpertBC(Algorithm):
                                            env.num_envs, self._windows(env.action_dim),
                                            c.demo_share, generator)  # fmt: skip
             return
+        try:
+            self.learner = ExpertBCLearner(c.dagger(), env.obs_dims, env.action_dim,
+                                           env.num_envs, None, c.demo_share, generator)
+        except ValueError as exc:
+            raise PluginError(str(exc), plugin=self.name) from None
+
+    def _load_windows(self, env: VecEnv) -> Any:
+        """The expert's data for the env's clips, read when training starts (evaluating,
+        playing and exporting a student need no expert directory)."""
+        import numpy as np
+
+        from retarget.expert.store import load_track
+        from retarget.learn.expert_bc import ExpertWindows
+        c = self.config
+        assert isinstance(c, ExpertBCConfig)
         if not hasattr(env, "place_state") or not hasattr(env, "library"):
             raise PluginError("needs a retarget environment (place_state, library)",
                               plugin=self.name)
@@ -123,12 +135,7 @@ class ExpertBC(Algorithm):
                 raise PluginError(f"clip {name!r} is not the clip the expert planned",
                                   plugin=self.name, hint=str(file))
             clips.append(data)
-        windows = ExpertWindows(clips, sim.STATE_FIELDS)
-        try:
-            self.learner = ExpertBCLearner(c.dagger(), env.obs_dims, env.action_dim,
-                                           env.num_envs, windows, c.demo_share, generator)
-        except ValueError as exc:
-            raise PluginError(str(exc), plugin=self.name) from None
+        return ExpertWindows(clips, sim.STATE_FIELDS)
 
     def _ready(self) -> ExpertBCLearner:
         if self.learner is None:
@@ -136,7 +143,10 @@ class ExpertBC(Algorithm):
         return self.learner
 
     def train_iteration(self, env: VecEnv) -> dict[str, float]:
-        return self._ready().train_iteration(env)
+        learner = self._ready()
+        if learner.windows is None:
+            learner.windows = self._load_windows(env)
+        return learner.train_iteration(env)
 
     def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
         return self._ready().act(obs)
