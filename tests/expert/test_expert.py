@@ -132,6 +132,10 @@ def test_cli_plans_resumes_and_a_student_clones_it(clip_file, tmp_path) -> None:
     ckpt = sorted((run / "checkpoints").glob("ckpt-*.pt"))[-1]
     state = load_checkpoint(ckpt)
     assert state["algorithm"]["env_steps"] >= 512
+    for f in (out / "clips").iterdir():  # a cloned student evaluates without the expert's data
+        f.unlink()
+    ev = _cli("eval", str(run), "--motions", str(clip_file), "--num-envs", "2", cwd=tmp_path)
+    assert ev.returncode == 0, ev.stderr
     dino = _cli("train", "--character", "dino", "--expert", str(out), "--steps", "64",
                 "--runs-dir", str(runs), cwd=tmp_path)  # fmt: skip
     assert dino.returncode != 0 and "--character human" in dino.stderr + dino.stdout
