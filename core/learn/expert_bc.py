@@ -25,40 +25,70 @@ from retarget.learn.dagger import DaggerLearner
 
 
 class ExpertWindows:
-    """Every replayable window of an expert directory, for one environment's library."""
+    """Every replayable window of an expert directory, for one environment's library.
+
+    The clips are concatenated once into flat arrays, so drawing ``n`` windows is a few
+    fancy-indexing operations whatever ``n`` is (no loop over windows or environments)."""
 
     def __init__(self, clips: Sequence[Mapping[str, np.ndarray]], fields: Sequence[str]) -> None:
-        self.clips = list(clips)
+        if not clips:
+            raise ValueError("an expert needs at least one clip")
         self.fields = tuple(fields)
-        self.frames = np.array([len(c["qpos"]) for c in self.clips])
-        self.demos = np.array([len(c["demo_frame"]) for c in self.clips])
+        self.frames = np.array([len(c["qpos"]) for c in clips])
+        self.demos = np.array([len(c["demo_frame"]) for c in clips])
+        self.nu = int(clips[0]["actions"].shape[1])
+        self.frame_start = np.concatenate([[0], np.cumsum(self.frames)[:-1]])
+        self.action_start = np.concatenate([[0], np.cumsum(self.frames - 1)[:-1]])
+        self.qpos = np.concatenate([c["qpos"] for c in clips])
+        self.qvel = np.concatenate([c["qvel"] for c in clips])
+        self.actions = np.concatenate([c["actions"] for c in clips]).astype(np.float32)
+        self.path_p = (self.frames - 1) / max(int((self.frames - 1).sum()), 1)
+        self.demo_clip = np.repeat(np.arange(len(clips)), self.demos)
+        if self.demos.sum():
+            cat = {k: np.concatenate([c[k] for c in clips if len(c["demo_frame"])])
+                   for k in ("demo_frame", "demo_steps", "demo_state_qpos", "demo_state_qvel",
+                             "demo_prev_action", "demo_actions")}  # fmt: skip
+            self.demo = cat
+        else:
+            self.demo = {}
 
     def draw(self, n: int, rng: np.random.Generator, demo_share: float, length: int
-             ) -> list[dict[str, Any]]:  # fmt: skip
-        """``n`` windows: beam members with probability ``demo_share``, else best-path
-        pieces of up to ``length`` steps starting at a uniform frame."""
-        out = []
-        weights = self.frames - 1
-        has_demos = self.demos.sum() > 0
-        for _ in range(n):  # a handful per step: the windows that ended
-            if has_demos and rng.random() < demo_share:
-                clip = int(rng.choice(len(self.clips), p=self.demos / self.demos.sum()))
-                c, row = self.clips[clip], int(rng.integers(self.demos[clip]))
-                steps = int(c["demo_steps"][row])
-                out.append({
-                    "clip": clip, "frame": int(c["demo_frame"][row]),
-                    "qpos": c["demo_state_qpos"][row], "qvel": c["demo_state_qvel"][row],
-                    "prev": c["demo_prev_action"][row], "actions": c["demo_actions"][row, :steps],
-                })  # fmt: skip
-                continue
-            clip = int(rng.choice(len(self.clips), p=weights / weights.sum()))
-            c = self.clips[clip]
-            f = int(rng.integers(self.frames[clip] - 1))
-            end = min(f + length, self.frames[clip] - 1)
-            prev = c["actions"][f - 1] if f > 0 else np.zeros(c["actions"].shape[1])
-            out.append({"clip": clip, "frame": f, "qpos": c["qpos"][f], "qvel": c["qvel"][f],
-                        "prev": prev, "actions": c["actions"][f:end]})  # fmt: skip
-        return out
+             ) -> dict[str, np.ndarray]:  # fmt: skip
+        """``n`` windows as arrays (``clip``, ``frame``, ``qpos``, ``qvel``, ``prev``,
+        ``actions`` padded to ``width(length)`` steps, ``steps``): beam members with
+        probability ``demo_share``, else best-path pieces of up to ``length`` steps
+        starting at a uniform frame."""
+        width = self.width(length)
+        demo = (rng.random(n) < demo_share) if self.demo else np.zeros(n, dtype=bool)
+        clip = rng.choice(len(self.frames), size=n, p=self.path_p)
+        frame = (rng.random(n) * (self.frames[clip] - 1)).astype(np.int64)
+        steps = np.minimum(length, self.frames[clip] - 1 - frame)
+        at = self.action_start[clip] + frame
+        qpos = self.qpos[self.frame_start[clip] + frame]
+        qvel = self.qvel[self.frame_start[clip] + frame]
+        prev = np.where((frame > 0)[:, None], self.actions[np.maximum(at - 1, 0)], 0.0)
+        cols = np.arange(width)
+        rows = np.minimum(at[:, None] + cols[None], len(self.actions) - 1)
+        actions = np.where((cols[None] < steps[:, None])[..., None], self.actions[rows], 0.0)
+        if demo.any():
+            pick = rng.integers(len(self.demo_clip), size=int(demo.sum()))
+            d = self.demo
+            clip[demo] = self.demo_clip[pick]
+            frame[demo] = d["demo_frame"][pick]
+            steps[demo] = d["demo_steps"][pick]
+            qpos[demo] = d["demo_state_qpos"][pick]
+            qvel[demo] = d["demo_state_qvel"][pick]
+            prev[demo] = d["demo_prev_action"][pick]
+            seg = d["demo_actions"][pick]
+            actions[demo] = 0.0
+            actions[demo, : seg.shape[1]] = seg
+        return {"clip": clip, "frame": frame, "qpos": qpos, "qvel": qvel,
+                "prev": prev.astype(np.float32), "actions": actions.astype(np.float32),
+                "steps": steps}  # fmt: skip
+
+    def width(self, length: int) -> int:
+        """Steps a drawn window can hold: the longer of a path piece and a beam segment."""
+        return max(length, self.demo["demo_actions"].shape[1] if self.demo else 0, 1)
 
 
 class ExpertBCLearner(DaggerLearner):
@@ -74,26 +104,30 @@ class ExpertBCLearner(DaggerLearner):
         self.demo_share = demo_share
         seed = int(torch.randint(0, 2**62, (1,), generator=self.generator).item())
         self.rng = np.random.default_rng(seed)
-        self.cursor: list[dict[str, Any] | None] = [None] * num_envs
+        self._reset_cursor()
         self.teacher = torch.nn.Identity()  # labels come from the replay
 
-    def _place(self, env: Any, ids: list[int]) -> None:
+    def _reset_cursor(self) -> None:
+        """No window yet: every environment draws one at the next step."""
+        self.window: np.ndarray | None = None  # (num_envs, width, nu) the replayed actions
+        self.at = np.zeros(self.num_envs, dtype=np.int64)
+        self.steps = np.zeros(self.num_envs, dtype=np.int64)
+
+    def _place(self, env: Any, ids: np.ndarray) -> None:
         if self.windows is None:
             raise RuntimeError("ExpertBCLearner.windows must be set before training")
         drawn = self.windows.draw(len(ids), self.rng, self.demo_share, self.config.rollout_steps)
-        for i, w in zip(ids, drawn, strict=True):
-            w["at"] = 0
-            self.cursor[i] = w
+        if self.window is None:
+            width = self.windows.width(self.config.rollout_steps)
+            self.window = np.zeros((self.num_envs, width, self.windows.nu), np.float32)
+        self.window[ids] = drawn["actions"]
+        self.at[ids] = 0
+        self.steps[ids] = drawn["steps"]
         if not hasattr(env, "place_state"):  # a plain VecEnv: stepped from where it is
             return
-        env.place_state(
-            torch.tensor(ids),
-            torch.tensor([w["clip"] for w in drawn]),
-            torch.tensor([w["frame"] for w in drawn]),
-            np.stack([w["qpos"] for w in drawn]),
-            np.stack([w["qvel"] for w in drawn]),
-            torch.from_numpy(np.stack([w["prev"] for w in drawn])).float(),
-        )
+        env.place_state(torch.from_numpy(ids), torch.from_numpy(drawn["clip"]),
+                        torch.from_numpy(drawn["frame"]), drawn["qpos"], drawn["qvel"],
+                        torch.from_numpy(drawn["prev"]))  # fmt: skip
 
     @torch.no_grad()
     def collect(self, env: Any) -> dict[str, float]:
@@ -101,10 +135,10 @@ class ExpertBCLearner(DaggerLearner):
         key = self.actor_key
         pending_rows: list[torch.Tensor] = []
         gap = 0.0
+        envs = np.arange(self.num_envs)
         for _ in range(c.rollout_steps):
-            stale = [i for i, w in enumerate(self.cursor)
-                     if w is None or w["at"] >= len(w["actions"])]  # fmt: skip
-            if stale:
+            stale = np.flatnonzero(self.at >= self.steps)
+            if stale.size:
                 self._place(env, stale)
             if hasattr(env, "observe_now"):
                 obs = env.observe_now([key])[key].float()
@@ -112,8 +146,8 @@ class ExpertBCLearner(DaggerLearner):
                 if self.last_obs is None:
                     self.last_obs = {k: v.float() for k, v in env.reset().items()}
                 obs = self.last_obs[key]
-            label = torch.from_numpy(np.stack(
-                [w["actions"][w["at"]] for w in self.cursor])).float()  # fmt: skip
+            assert self.window is not None
+            label = torch.from_numpy(self.window[envs, self.at])
             if int(self.obs_norm.groups[key].count) == 0:  # the first batch sets the scale
                 self.obs_norm.update({key: obs})
             else:
@@ -122,12 +156,10 @@ class ExpertBCLearner(DaggerLearner):
             self._store(obs, label)
             next_obs, reward, terminated, truncated, _ = env.step(label)
             self.last_obs = {k: v.float() for k, v in next_obs.items()}
-            ended = (terminated.bool() | truncated.bool()).tolist()
-            self.episodes.step(reward.float(), terminated.bool() | truncated.bool())
-            for i, w in enumerate(self.cursor):
-                w["at"] += 1
-                if ended[i]:
-                    self.cursor[i] = None
+            ended = (terminated.bool() | truncated.bool())
+            self.episodes.step(reward.float(), ended)
+            self.at += 1
+            self.at[ended.numpy()] = self.steps[ended.numpy()]  # an ended episode: new window
         if pending_rows:
             self.obs_norm.update({key: torch.cat(pending_rows)})
         return {"action_gap": gap / c.rollout_steps,
@@ -135,7 +167,7 @@ class ExpertBCLearner(DaggerLearner):
 
     def fresh_rank(self, generator: torch.Generator) -> None:
         super().fresh_rank(generator)
-        self.cursor = [None] * self.num_envs
+        self._reset_cursor()
 
     def state_dict(self) -> dict[str, Any]:
         state = super().state_dict()
@@ -146,4 +178,4 @@ class ExpertBCLearner(DaggerLearner):
         super().load_state_dict(state)
         if "replay_rng" in state:
             self.rng.bit_generator.state = json.loads(state["replay_rng"])
-        self.cursor = [None] * self.num_envs  # a resumed run starts new windows
+        self._reset_cursor()  # a resumed run starts new windows
