@@ -16,10 +16,10 @@ import time
 
 import numpy as np
 
+from retarget.motion.camera_rigs import RIGS
 from retarget.motion.devices import device_poses
 from retarget.motion.procedural import default_motions
 from retarget.render.ego import EgoRenderer
-from retarget.render.ego_rigs import RIGS
 
 SIZES = ((40, 30), (80, 60), (160, 120))
 

@@ -105,11 +105,12 @@ def test_console_script_runs() -> None:
 def test_motion_generate_writes_clips_that_read_back(tmp_path, capsys) -> None:
     import numpy as np
 
+    from retarget import load_plugins
     from retarget.motion.procedural import default_motions
     from retarget.motion.sources import load_motions
 
     assert main(["motion", "generate", "--out", str(tmp_path), "--names", "sit_stand"]) == 0
-    (read,) = load_motions(str(tmp_path))
+    (read,) = load_motions(str(tmp_path), load_plugins().motion_formats())
     (made,) = default_motions(names=("sit_stand",))
     assert read.num_frames == made.num_frames
     np.testing.assert_allclose(read.global_pos, made.global_pos, atol=1e-4)

@@ -7,9 +7,9 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from retarget.cli.numbers import amount, count
-from retarget.cli.recipe_args import add_pick_flags, patterns
 from retarget.cli.run_changes import add_run_change_args
+from retarget.commands.numbers import amount, count
+from retarget.commands.recipe_args import add_pick_flags, patterns
 from retarget.errors import RetargetError
 from retarget.registry import Registry
 

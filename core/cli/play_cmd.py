@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from retarget.cli.numbers import amount, count, image_size
 from retarget.cli.run_changes import add_run_change_args
+from retarget.commands.numbers import amount, count, image_size
 from retarget.errors import RetargetError, require_extra
 from retarget.registry import Registry
 from retarget.train.run_dir import resolve_run

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-from retarget.cli.recipe_args import add_recipe_flags, load_from_args
+from retarget.commands.recipe_args import add_recipe_flags, load_from_args
 from retarget.registry import Registry
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import argparse
 
-from retarget.cli.recipe_args import add_set_flag
+from retarget.commands.recipe_args import add_set_flag
 
 
 def add_run_change_args(parser: argparse.ArgumentParser) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from retarget.cli.numbers import amount, count
+from retarget.commands.numbers import amount, count
 from retarget.registry import Registry
 
 

@@ -9,8 +9,8 @@ from contextlib import AbstractContextManager, contextmanager, nullcontext
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from retarget.cli.numbers import amount, count
-from retarget.cli.recipe_args import add_recipe_flags, load_from_args
+from retarget.commands.numbers import amount, count
+from retarget.commands.recipe_args import add_recipe_flags, load_from_args
 from retarget.errors import RecipeError
 from retarget.registry import Registry
 from retarget.train.run_dir import (

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from retarget.cli.numbers import amount, count
+from retarget.commands.numbers import amount, count
 from retarget.errors import RetargetError, require_extra
 from retarget.registry import Registry
 
@@ -58,7 +58,8 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         else:
             from retarget.motion.sources import read_clip
 
-            clip = read_clip(target, joints=args.joints, fps=args.source_fps)
+            clip = read_clip(target, joints=args.joints, fps=args.source_fps,
+                             formats=registry.motion_formats())
             tracks.append(clip_track(target, clip))
     viewer = Viewer(tracks, args.host, args.port)
     out.print(f"viewer on http://{args.host}:{args.port} ({len(tracks)} tracks); Ctrl-C stops")

@@ -20,23 +20,20 @@ from retarget.recipe import ResolvedRecipe
 from retarget.registry import Registry
 
 
-def motion_formats(
-    resolved: ResolvedRecipe, registry: Registry | None
-) -> dict[str, MotionFormat] | None:
+def motion_formats(resolved: ResolvedRecipe, registry: Registry | None) -> dict[str, MotionFormat]:
     """The readers of a recipe's motions: only the ``motions.format`` component, exactly as
     configured, else every registered format with its defaults (each file read by the one
-    whose suffix it has); None without a registry (the installed plugins are looked up)."""
+    whose suffix it has); without a registry, the installed plugins'."""
     if "motions.format" in resolved.components:
         comp = resolved.component("motions.format")
         fmt = comp.instantiate()
         assert isinstance(fmt, MotionFormat)
         return {comp.entry.name: fmt}
     if registry is None:
-        return None
-    return {
-        name: registry.get("motion_format", name).cls()  # type: ignore[misc]
-        for name in registry.names("motion_format")
-    }
+        from retarget.registry.loader import load_plugins
+
+        registry = load_plugins()
+    return registry.motion_formats()
 
 
 def env_from_recipe(

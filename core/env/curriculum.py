@@ -14,23 +14,9 @@ clip weights apply), so every frame keeps being visited. All of it is index arit
 from __future__ import annotations
 
 import torch
-from pydantic import BaseModel, ConfigDict, Field
 
 from retarget.motion.library import MotionLibrary
-
-
-class CurriculumOptions(BaseModel):
-    """The recipe's ``env.curriculum`` section."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
-    uniform: float = Field(0.5, ge=0.0, le=1.0,
-                           description="share of starts drawn frame-uniformly")  # fmt: skip
-    bin_seconds: float = Field(2.0, ge=0.1, le=60.0, description="segment length, s")
-    half_life_steps: int = Field(
-        2_000_000, ge=1000, le=10**12,
-        description="environment steps after which a failure counts half",
-    )  # fmt: skip
+from retarget.settings.env import CurriculumOptions
 
 
 class FailureCurriculum:

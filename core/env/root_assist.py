@@ -15,9 +15,9 @@ from __future__ import annotations
 
 import numpy as np
 import torch
-from pydantic import BaseModel, ConfigDict, Field
 
 from retarget.geometry.heading import quat_conj, quat_mul
+from retarget.settings.env import RootAssistOptions
 
 
 def rotation_vector(q: torch.Tensor) -> torch.Tensor:
@@ -27,23 +27,6 @@ def rotation_vector(q: torch.Tensor) -> torch.Tensor:
     n = v.norm(dim=-1, keepdim=True)
     angle = 2.0 * torch.atan2(n, q[:, :1])
     return torch.where(n > 1e-8, v * angle / n.clamp(min=1e-8), 2.0 * v)
-
-
-class RootAssistOptions(BaseModel):
-    """The recipe's ``env.root_assist`` section."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
-    strength: float = Field(1.0, ge=0.0, le=10.0, description="scale at the start of training")
-    anneal_steps: int = Field(
-        3_000_000, ge=1, le=10**12, description="environment steps until the assist is zero"
-    )
-    frequency: float = Field(1.5, gt=0.0, le=10.0, description="PD natural frequency, Hz")
-    damping_ratio: float = Field(1.0, ge=0.0, le=5.0, description="PD damping ratio")
-    max_force: float = Field(1.0, gt=0.0, le=10.0, description="cap, times body weight")
-
-    def scale_at(self, env_steps: int) -> float:
-        return self.strength * max(0.0, 1.0 - env_steps / self.anneal_steps)
 
 
 class RootAssist:

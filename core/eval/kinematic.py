@@ -15,25 +15,19 @@ while the estimator says it is planted, and contact agreement is its contact acc
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Protocol
 
 import numpy as np
 import torch
 
 from retarget.env.reference import CharacterReference
 from retarget.geometry import rotations as rot
+from retarget.kinds.pose_estimator import PoseEstimator
 from retarget.kinds.state import ReferenceBatch, StepContext
 from retarget.motion import skeleton as sk
 from retarget.motion.clip import MotionClip
 
 DOWN_NEWTONS = 100.0
 """Force given to a foot the estimator says is down (anything above the probe's 1 N)."""
-
-
-class PoseEstimator(Protocol):
-    """What ``retarget eval`` needs of a kinematic method (``Algorithm.pose_estimator()``)."""
-
-    def estimate_rows(self, rows: torch.Tensor): ...
 
 
 @dataclass

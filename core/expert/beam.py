@@ -145,7 +145,7 @@ class BeamTracker:
         progress: Callable[[int], None] | None = None,
     ) -> Track:
         """Plan clip ``clip`` (library index) from its first frame for ``seconds`` (all of
-        it when None); ``progress(frames)`` is called after every segment."""
+        it when None); ``progress(frames)`` is called after every segment of every pass."""
         c, env = self.config, self.env
         cpu0 = time.process_time()
         rng = np.random.default_rng([c.seed, clip])
@@ -155,35 +155,80 @@ class BeamTracker:
         if seconds is not None:
             length = max(2, min(length, round(seconds * fps) + 1))
         env.place(torch.tensor([clip]), torch.tensor([0]))
-        beam = {k: v.copy() for k, v in env.sim.state_dict().items()}
+        placed = {k: v.copy() for k, v in env.sim.state_dict().items()}
         first = {
             "qpos": env.sim.raw("qpos")[0].copy(),
             "qvel": env.sim.raw("qvel")[0].copy(),
             "body": env.sim.state.body_pos[0].numpy().astype(np.float64),
         }
+        best: tuple[float, dict[str, np.ndarray], dict[str, np.ndarray]] | None = None
+        prior: np.ndarray | None = None
+        for round_ in range(c.passes):
+            noise = 1.0 if round_ == 0 else c.refine
+            total, path, demos = self._search(placed, start, length, rng, prior, noise, progress)
+            if best is None or total < best[0]:
+                best = (total, path, demos)
+            prior = best[1]["off"]
+        assert best is not None
+        _, path, demos = best
+        frames = start + np.arange(length)
+        return Track(
+            clip=lib.names[clip],
+            fps=fps,
+            actions=path["acts"].astype(np.float32),
+            qpos=np.concatenate([first["qpos"][None], path["qpos"]]),
+            qvel=np.concatenate([first["qvel"][None], path["qvel"]]),
+            body_pos=np.concatenate([first["body"][None], path["body"]]).astype(np.float32),
+            ref_body_pos=env.reference.arrays["body_pos"][frames].numpy(),
+            ref_qpos0=env.reference.qpos64[start].copy(),
+            cpu_seconds=time.process_time() - cpu0,
+            demos=demos,
+        )
+
+    def _search(
+        self,
+        placed: dict[str, np.ndarray],
+        start: int,
+        length: int,
+        rng: np.random.Generator,
+        prior: np.ndarray | None,
+        noise_scale: float,
+        progress: Callable[[int], None] | None,
+    ) -> tuple[float, dict[str, np.ndarray], dict[str, np.ndarray]]:
+        """One beam-search pass from the placed state. ``prior`` (segments, nu): offsets of a
+        previous pass's best path that this pass samples around. Returns the best path's
+        summed cost, the path (``acts``, ``qpos``, ``qvel``, ``body``, ``off`` per segment)
+        and the beam members kept as demonstrations."""
+        c, env = self.config, self.env
         nu, K = env.layout.nu, c.samples
-        offset = np.zeros((1, nu))
+        beam = placed
+        dev = np.zeros((1, nu))
         last = np.zeros((1, nu))
+        spent = np.zeros(1)
         segments: list[dict[str, np.ndarray]] = []
         demos: dict[str, list[np.ndarray]] = {}
+        ref_q = env.reference.qpos64
+        last_row = start + length - 1
         f = 0
         while f < length - 1:
             S = min(c.segment, length - 1 - f)
             rows = start + f + 1 + np.arange(S)
-            nominal = self._nominal(np.minimum(rows + c.lead, start + length - 1))
-            B = len(offset)
+            nominal = self._nominal(np.minimum(rows + c.lead, last_row))
+            B = len(dev)
             parent = rng.integers(0, B, K)
             parent[: min(B, K)] = np.arange(min(B, K))
-            noise = rng.normal(size=(K, nu)) * self._sigma
+            noise = rng.normal(size=(K, nu)) * self._sigma * noise_scale
             noise[rng.random(K) < c.quiet] = 0.0
-            off = c.carry * offset[parent] + noise
+            new_dev = c.carry * dev[parent] + noise
+            base = prior[len(segments)][None] if prior is not None else 0.0
+            off = base + new_dev
             self.sim.load_state_dict({k: v[parent] for k, v in beam.items()})
             acts = np.zeros((K, S, nu))
             qpos = np.zeros((K, S, self.sim.raw("qpos").shape[1]))
             qvel = np.zeros((K, S, self.sim.raw("qvel").shape[1]))
             body = np.zeros((K, S, *self.sim.state.body_pos.shape[1:]))
             bad = np.zeros(K, dtype=bool)
-            ref_q = env.reference.qpos64
+            running = np.zeros(K)
             for j in range(S):
                 angles = self.sim.raw("qpos")[:, self._aq]
                 fb = c.gain * (ref_q[rows[j]][self._aq][None] - angles) / self._scale
@@ -191,8 +236,9 @@ class BeamTracker:
                 bad |= self.sim.step(acts[:, j])
                 qpos[:, j], qvel[:, j] = self.sim.raw("qpos"), self.sim.raw("qvel")
                 body[:, j] = self.sim.state.body_pos.numpy()
+                if c.running:
+                    running += self._cost(int(rows[j])) / S
             end_state = self.sim.state_dict()
-            last_row = start + length - 1
             scored = rows[-1].item()
             for _ in range(c.lookahead):
                 row = min(scored + 1, last_row)
@@ -203,7 +249,8 @@ class BeamTracker:
                 target = self._nominal(np.array([min(row + c.lead, last_row)]))[0]
                 bad |= self.sim.step(np.clip(target[None] + off + fb, self._lo, self._hi))
                 scored = row
-            cost = self._cost(scored) + c.weights.effort * np.square(off).mean(-1)
+            cost = (self._cost(scored) + c.running * running
+                    + c.weights.effort * np.square(off).mean(-1))  # fmt: skip
             cost[bad] = np.inf
             order = np.argsort(cost, kind="stable")[: c.beam]
             if c.keep:
@@ -217,30 +264,23 @@ class BeamTracker:
                 demos.setdefault("actions", []).append(padded)
                 demos.setdefault("steps", []).append(np.full(len(kept), S))
             segments.append({"parent": parent[order], "acts": acts[order], "qpos": qpos[order],
-                             "qvel": qvel[order], "body": body[order]})
+                             "qvel": qvel[order], "body": body[order],
+                             "off": off[order]})  # fmt: skip
             beam = {k: v[order].copy() for k, v in end_state.items()}
-            offset, last = off[order], acts[order, -1]
+            spent = spent[parent[order]] + np.where(np.isfinite(cost[order]), cost[order], 1e9)
+            dev, last = new_dev[order], acts[order, -1]
             f += S
             if progress is not None:
                 progress(S)
         # read the best path back, last segment first
         idx = 0
-        parts: dict[str, list[np.ndarray]] = {"acts": [], "qpos": [], "qvel": [], "body": []}
+        parts: dict[str, list[np.ndarray]] = {k: [] for k in ("acts", "qpos", "qvel", "body")}
+        offsets = []
         for seg in reversed(segments):
             for k in parts:
                 parts[k].append(seg[k][idx])
+            offsets.append(seg["off"][idx])
             idx = int(seg["parent"][idx])
         path = {k: np.concatenate(v[::-1], axis=0) for k, v in parts.items()}
-        frames = start + np.arange(length)
-        return Track(
-            clip=lib.names[clip],
-            fps=fps,
-            actions=path["acts"].astype(np.float32),
-            qpos=np.concatenate([first["qpos"][None], path["qpos"]]),
-            qvel=np.concatenate([first["qvel"][None], path["qvel"]]),
-            body_pos=np.concatenate([first["body"][None], path["body"]]).astype(np.float32),
-            ref_body_pos=env.reference.arrays["body_pos"][frames].numpy(),
-            ref_qpos0=env.reference.qpos64[start].copy(),
-            cpu_seconds=time.process_time() - cpu0,
-            demos={k: np.concatenate(v) for k, v in demos.items()},
-        )
+        path["off"] = np.stack(offsets[::-1])  # (segments, nu)
+        return float(spent[0]), path, {k: np.concatenate(v) for k, v in demos.items()}

@@ -46,5 +46,13 @@ class ExpertConfig(BaseModel):
                       "ahead of the frame being reached (PD servos lag)")
     keep: int = Field(16, ge=0, le=4096, description="beam members per segment saved as "
                       "extra demonstrations (states around the best path)")
+    running: float = Field(0.0, ge=0, le=100, description="weight of the mean cost over the "
+                           "segment's own steps, added to the cost scored after the lookahead "
+                           "(keeps the pose on the reference between segment ends)")
+    passes: int = Field(1, ge=1, le=8, description="search passes; each later pass samples "
+                        "around the previous pass's best offsets with refine x sigma "
+                        "(SAMCON's iterations) and the lowest-cost path is kept")
+    refine: float = Field(0.5, gt=0, le=1, description="noise of a refinement pass, as a "
+                          "share of sigma")
     seed: int = Field(0, ge=0)
     weights: CostWeights = Field(default_factory=CostWeights)

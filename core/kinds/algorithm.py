@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 from retarget.errors import PluginError
 from retarget.kinds.base import Plugin
 from retarget.kinds.comm import SINGLE, Comm
+from retarget.kinds.pose_estimator import PoseEstimator
 
 if TYPE_CHECKING:
     import torch
@@ -109,11 +110,11 @@ class Algorithm(Plugin):
             hint="train from scratch (drop --init-from)",
         )
 
-    def pose_estimator(self) -> Any | None:
+    def pose_estimator(self) -> PoseEstimator | None:
         """For a kinematic method (a pose estimator, which outputs a body instead of actions):
-        the object ``retarget eval`` measures, with ``estimate_rows(rows)`` (see
-        :mod:`retarget.eval.kinematic`). ``None`` (the default): a policy, evaluated by
-        stepping physics with :meth:`act`."""
+        the object ``retarget eval`` measures (a
+        :class:`~retarget.kinds.pose_estimator.PoseEstimator`). ``None`` (the default): a
+        policy, evaluated by stepping physics with :meth:`act`."""
         return None
 
     def export_metadata(self, env: Any) -> dict[str, Any] | None:

@@ -88,7 +88,7 @@ def _rig(value: object) -> str | None:
         return None
     from pydantic import ValidationError
 
-    from retarget.render.ego_rigs import RIGS, CameraRig
+    from retarget.motion.camera_rigs import RIGS, CameraRig
 
     if isinstance(value, str) and value in RIGS:
         return RIGS[value].model_dump_json()

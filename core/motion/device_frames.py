@@ -62,7 +62,7 @@ def read_frames(path: str | Path) -> RecordedFrames:
     """Read and check a frames file; errors name the file and the array."""
     from pydantic import ValidationError
 
-    from retarget.render.ego_rigs import CameraRig
+    from retarget.motion.camera_rigs import CameraRig
 
     path = Path(path)
     try:

@@ -128,11 +128,16 @@ def load_motions(
     progress: bool = True,
 ) -> list[MotionClip]:
     """Clips from ``path`` / ``$RETARGET_DATA`` (only the files ``include``/``exclude``
-    select), or the generated default set; a progress bar while many files are parsed."""
-    if formats is None:
-        formats = default_formats()
-    suffixes = [s for f in formats.values() for s in f.suffixes]
-    files = resolve_motion_source(path, suffixes)
+    select), or the generated default set; a progress bar while many files are parsed.
+
+    ``formats`` are the readers (``Registry.motion_formats()``, or one configured format):
+    this layer does not load plugins, the caller hands it the invocation's."""
+    named = not (path is None or str(path) == "") or os.environ.get(ENV_VAR, "").strip()
+    if named and not formats:
+        raise ValueError("load_motions: reading files needs the motion formats: pass "
+                         "registry.motion_formats() (registry = retarget.load_plugins())")
+    suffixes = [s for f in (formats or {}).values() for s in f.suffixes]
+    files = resolve_motion_source(path, suffixes) if named else None
     if files is None:
         from retarget.motion.procedural import default_motions
 
@@ -152,17 +157,6 @@ def load_motions(
     return [read_cached(reader_for(f, formats), f, folder) for f in steps]
 
 
-def default_formats() -> dict[str, MotionFormat]:
-    """One default-configured instance of every registered motion format."""
-    from retarget.registry.loader import load_plugins
-
-    registry = load_plugins()
-    return {
-        name: registry.get("motion_format", name).cls()  # type: ignore[misc]
-        for name in registry.names("motion_format")
-    }
-
-
 def read_clip(path: str | Path, *, joints: str | None = None, fps: float | None = None,
               formats: Mapping[str, MotionFormat] | None = None) -> MotionClip:  # fmt: skip
     """One motion file read by the format its suffix and content say; ``joints`` (a names
@@ -170,7 +164,9 @@ def read_clip(path: str | Path, *, joints: str | None = None, fps: float | None 
     path = Path(path)
     if not path.is_file():
         raise MotionError("no such motion file", file=path)
-    formats = dict(formats or default_formats())
+    if not formats:
+        raise ValueError("read_clip needs the motion formats (Registry.motion_formats())")
+    formats = dict(formats)
     if (joints or fps) and "positions" in formats:
         cls = type(formats["positions"])
         settings = {k: v for k, v in (("joints", joints), ("fps", fps)) if v}

@@ -12,8 +12,8 @@ from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
-from retarget.env.options import EnvOptions
-from retarget.sim.settings import SimSettings
+from retarget.settings.env import EnvOptions
+from retarget.settings.sim import SimSettings
 
 
 class Strict(BaseModel):

@@ -11,7 +11,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 from retarget.errors import PluginError
-from retarget.kinds import KINDS, Plugin
+from retarget.kinds import KINDS, MotionFormat, Plugin
 from retarget.kinds.base import NAME_RE
 
 
@@ -118,6 +118,15 @@ class Registry:
 
     def names(self, kind: str) -> list[str]:
         return sorted(self.entries[kind])
+
+    def motion_formats(self) -> dict[str, MotionFormat]:
+        """One default-configured reader of every registered motion format, by name: what
+        reads a folder of mixed files (each file by the format its suffix names). The one
+        place this set is built; the motion layer takes it as an argument."""
+        return {
+            name: self.entries["motion_format"][name].cls()  # type: ignore[misc]
+            for name in self.names("motion_format")
+        }
 
     def get(self, kind: str, name: str) -> Entry:
         """The entry for ``name``; an unknown name raises with the choices and close matches."""

@@ -2,7 +2,7 @@
 
 The reference person is drawn as shaped capsules with the clip's own proportions (thicker
 torso and thighs, thinner forearms; a head the headset sits in front of), on a checkered floor,
-from each camera of a :class:`~retarget.render.ego_rigs.CameraRig` mounted at the headset
+from each camera of a :class:`~retarget.motion.camera_rigs.CameraRig` mounted at the headset
 pose. This is SimXR's input: the images come from the *reference* motion, rendered once per
 clip frame (:mod:`retarget.render.ego_cache`), not from the simulated body. Lighting is a
 headlight with shadows and reflections off, which keeps a small frame at a few milliseconds on
@@ -16,7 +16,7 @@ from types import TracebackType
 import numpy as np
 
 from retarget.motion import skeleton as sk
-from retarget.render.ego_rigs import CameraRig
+from retarget.motion.camera_rigs import CameraRig
 from retarget.render.gl import ensure_offscreen
 
 _SCENE = """

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from retarget.render.ego_rigs import CameraRig
+from retarget.motion.camera_rigs import CameraRig
 
 VERSION = 1
 """Bumped when the renderer draws differently, so old images are not reused."""

@@ -15,7 +15,7 @@ from typing import Any
 import retarget
 from retarget import Command, RetargetError
 from retarget.character.builder import geom_z_extent
-from retarget.cli.numbers import image_size
+from retarget.commands.numbers import image_size
 
 
 def _parse_sets(pairs: list[str]) -> dict[str, Any]:
@@ -31,18 +31,19 @@ def _parse_sets(pairs: list[str]) -> dict[str, Any]:
     return out
 
 
-def _character(name: str, config: dict[str, Any]) -> Any:
-    cls = retarget.load_plugins().get("character", name).cls
+def _character(registry: Any, name: str, config: dict[str, Any]) -> Any:
+    cls = registry.get("character", name).cls
     try:
         return cls(cls.Config.model_validate(config))
     except ValueError as exc:
         raise RetargetError(f"bad --set for character '{name}': {exc}") from None
 
 
-def _read_clip(path: Path, joints: str | None = None, fps: float | None = None) -> Any:
+def _read_clip(path: Path, formats: Any, joints: str | None = None, fps: float | None = None
+               ) -> Any:  # fmt: skip
     from retarget.motion.sources import read_clip
 
-    return read_clip(path, joints=joints, fps=fps)
+    return read_clip(path, joints=joints, fps=fps, formats=formats)
 
 
 class CharacterCommand(Command):
@@ -76,13 +77,15 @@ class CharacterCommand(Command):
 
     def run(self, args: argparse.Namespace) -> int:
         width, height = args.size
-        character = _character(args.name if args.character_command == "show"
+        registry = getattr(self, "registry", None) or retarget.load_plugins()
+        character = _character(registry, args.name if args.character_command == "show"
                                else args.character, _parse_sets(args.set))
         args.out.parent.mkdir(parents=True, exist_ok=True)
         if args.character_command == "show":
             show(character, args.out, width, height)
         else:
-            clip = _read_clip(args.clip, args.joints, args.source_fps)
+            clip = _read_clip(args.clip, registry.motion_formats(), args.joints,
+                              args.source_fps)
             info = retarget_video(character, clip, args.out, width, height,
                                   seconds=args.seconds, start=args.start, fps=args.fps)
             print(f"{character.name}: root scale {info['root_scale']:.3f}, joint-limit "

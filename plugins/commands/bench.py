@@ -37,7 +37,7 @@ class BenchCommand(Command):
     help = "measure throughput on this machine (bench env)"
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
-        from retarget.cli.recipe_args import add_recipe_flags
+        from retarget.commands.recipe_args import add_recipe_flags
         sub = parser.add_subparsers(dest="bench_verb", required=True)
         env = sub.add_parser("env", help="environment steps/s vs raw MuJoCo steps/s")
         add_recipe_flags(env)
@@ -54,7 +54,7 @@ class BenchCommand(Command):
         from rich.progress import Progress
         from rich.table import Table
 
-        from retarget.cli.recipe_args import load_from_args
+        from retarget.commands.recipe_args import load_from_args
         from retarget.env import random_actions
         from retarget.env.build import env_from_recipe
         console = Console()

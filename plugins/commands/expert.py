@@ -67,7 +67,7 @@ class ExpertCommand(Command):
     help = "track clips by trajectory optimisation (no training); data for students"
 
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
-        from retarget.cli.recipe_args import add_pick_flags, add_set_flag
+        from retarget.commands.recipe_args import add_pick_flags, add_set_flag
         parser.add_argument("clips", nargs="+", help="motion files, folders or archives")
         parser.add_argument("--out", required=True, help="expert directory (resumed if it exists)")
         parser.add_argument("--recipe", default="teacher",
@@ -93,7 +93,7 @@ class ExpertCommand(Command):
         from rich.console import Console
         from rich.progress import Progress
 
-        from retarget.cli.recipe_args import patterns
+        from retarget.commands.recipe_args import patterns
         from retarget.errors import RecipeError
         from retarget.expert import ExpertConfig
         from retarget.expert.store import (

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import retarget
 from retarget import Command, MotionError, RetargetError
-from retarget.cli.numbers import MAX_PIXELS, MIN_PIXELS, count, image_size
+from retarget.commands.numbers import MAX_PIXELS, MIN_PIXELS, count, image_size
 from retarget.errors import require_extra
 
 if TYPE_CHECKING:
@@ -39,11 +39,7 @@ def _formats(args: argparse.Namespace, registry: Any) -> dict:
         except ValueError as exc:
             raise RetargetError(f"--format {chosen}: {exc}") from None
         return {chosen: entry.cls(config)}
-    if registry is None:
-        from retarget.motion.sources import default_formats
-
-        return default_formats()
-    return {n: registry.get("motion_format", n).cls() for n in registry.names("motion_format")}
+    return (registry or retarget.load_plugins()).motion_formats()
 
 
 def _read(path: str, formats: dict) -> MotionClip:
@@ -169,8 +165,8 @@ class MotionCommand(Command):
         times = np.arange(clip.num_frames) / clip.fps
         frames = None
         if args.cameras:
+            from retarget.motion.camera_rigs import RIGS
             from retarget.render.ego_cache import render_into
-            from retarget.render.ego_rigs import RIGS
 
             rig = RIGS[args.cameras]
             width, height = args.size
@@ -308,9 +304,9 @@ def _camera_views(clip, picks, rig_name: str, size: int):
     """``(K * C, H, W, 3)`` grayscale views of the rig's cameras at frames ``picks``."""
     import numpy as np
 
+    from retarget.motion.camera_rigs import RIGS
     from retarget.motion.devices import device_poses
     from retarget.render.ego import EgoRenderer
-    from retarget.render.ego_rigs import RIGS
 
     rig = RIGS[rig_name]
     headsets = device_poses(clip.global_pos, clip.global_rot, clip.height)[:, 0]

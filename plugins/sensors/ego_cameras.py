@@ -25,7 +25,7 @@ from retarget import (
     Sensor,
     StepContext,
 )
-from retarget.render.ego_rigs import RIGS, CameraRig
+from retarget.motion.camera_rigs import RIGS, CameraRig
 
 if TYPE_CHECKING:
     import torch
@@ -103,7 +103,7 @@ class EgoCameras(Sensor):
         import torch
         from pydantic import ValidationError
 
-        from retarget.render.ego_rigs import CameraRig
+        from retarget.motion.camera_rigs import CameraRig
 
         if self._images is None:
             raise PluginError("replay before prepare(library)", plugin=self.name)

@@ -213,7 +213,7 @@ def test_a_recorded_headset_capture_drives_the_image_student(tmp_path) -> None:
     naming the file; replayed frames are exactly what the student reads."""
     from retarget import PluginError, RecordedStream
     from retarget.learn.columns import image_inputs
-    from retarget.render.ego_rigs import RIGS
+    from retarget.motion.camera_rigs import RIGS
 
     run = image_student(tmp_path, steps=32)
     assert main(["motion", "generate", "--out", str(tmp_path / "clips"), "--names", "walk"]) == 0

@@ -11,11 +11,20 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from retarget import load_plugins
 from retarget.errors import MotionError
 from retarget.motion import procedural
 from retarget.motion.bvh_write import write_bvh
 from retarget.motion.clip_cache import clip_cache_dir, read_cached
-from retarget.motion.sources import default_formats, load_motions, reader_for
+from retarget.motion.sources import load_motions as _load_motions
+from retarget.motion.sources import reader_for
+
+FORMATS = load_plugins().motion_formats()
+
+
+def load_motions(path, **kwargs):
+    """The motion layer's reader with every installed format."""
+    return _load_motions(path, FORMATS, **kwargs)
 
 
 def _clips_dir(tmp_path: Path) -> Path:
@@ -30,7 +39,7 @@ def _clips_dir(tmp_path: Path) -> Path:
 def _first_clip(tmp_path: Path):
     """One written clip, the reader for it, and an empty cache folder."""
     path = sorted(_clips_dir(tmp_path).iterdir())[0]
-    return path, reader_for(path, default_formats()), tmp_path / "cache"
+    return path, reader_for(path, FORMATS), tmp_path / "cache"
 
 
 def test_a_tar_gz_and_a_zip_read_as_their_clips(tmp_path: Path) -> None:

@@ -11,9 +11,9 @@ import pytest
 
 from retarget.errors import MotionError
 from retarget.motion import device_frames
+from retarget.motion.camera_rigs import RIGS
 from retarget.motion.device_frames import RecordedFrames, frames_path, read_frames, write_frames
 from retarget.motion.device_recording import DeviceRecording, read_recording, write_recording
-from retarget.render.ego_rigs import RIGS
 
 RIG = RIGS["aria"].model_dump_json()
 

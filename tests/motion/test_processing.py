@@ -98,7 +98,12 @@ def test_motion_sources(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, mocap_d
     with pytest.raises(MotionError, match="no motion files"):
         resolve_motion_source(tmp_path)
     (tmp_path / "x.fbx").write_text("")
-    from retarget.motion.sources import default_formats, reader_for
+    from retarget import load_plugins
+    from retarget.motion.sources import reader_for
 
+    formats = load_plugins().motion_formats()
     with pytest.raises(MotionError, match=r"known: \.bvh"):
-        reader_for(tmp_path / "x.fbx", default_formats())
+        reader_for(tmp_path / "x.fbx", formats)
+    with pytest.raises(ValueError, match="motion_formats"):  # files named, no readers given
+        load_motions(str(one))
+    monkeypatch.delenv(ENV_VAR)

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from retarget.motion.camera_rigs import RIGS, Camera
 from retarget.motion.devices import device_poses
 from retarget.motion.procedural import default_motions
 from retarget.render import ego_cache
 from retarget.render.ego import EgoRenderer
-from retarget.render.ego_rigs import RIGS, Camera
 
 WALK = next(c for c in default_motions() if c.name.startswith("walk"))
 HEADSETS = device_poses(WALK.global_pos, WALK.global_rot, WALK.height)[:, 0]

@@ -6,12 +6,12 @@ import numpy as np
 import torch
 
 from retarget.env import EnvOptions, RetargetEnv
+from retarget.motion.camera_rigs import RIGS
 from retarget.motion.procedural import default_motions
 from retarget.plugins.characters.human import Human
 from retarget.plugins.sensors.devices import Hmd
 from retarget.plugins.sensors.ego_cameras import EgoCameras
 from retarget.render.ego import EgoRenderer
-from retarget.render.ego_rigs import RIGS
 
 WALK = [next(c for c in default_motions() if c.name.startswith("walk"))]
 

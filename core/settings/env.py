@@ -1,0 +1,71 @@
+"""The tracking environment's own settings: the recipe's ``env`` section, used as is
+(with its ``curriculum`` and ``root_assist`` subsections)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from pydantic import BaseModel, ConfigDict, Field
+
+
+class CurriculumOptions(BaseModel):
+    """The recipe's ``env.curriculum`` section."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    uniform: float = Field(0.5, ge=0.0, le=1.0,
+                           description="share of starts drawn frame-uniformly")  # fmt: skip
+    bin_seconds: float = Field(2.0, ge=0.1, le=60.0, description="segment length, s")
+    half_life_steps: int = Field(
+        2_000_000, ge=1000, le=10**12,
+        description="environment steps after which a failure counts half",
+    )  # fmt: skip
+
+
+class RootAssistOptions(BaseModel):
+    """The recipe's ``env.root_assist`` section."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    strength: float = Field(1.0, ge=0.0, le=10.0, description="scale at the start of training")
+    anneal_steps: int = Field(
+        3_000_000, ge=1, le=10**12, description="environment steps until the assist is zero"
+    )
+    frequency: float = Field(1.5, gt=0.0, le=10.0, description="PD natural frequency, Hz")
+    damping_ratio: float = Field(1.0, ge=0.0, le=5.0, description="PD damping ratio")
+    max_force: float = Field(1.0, gt=0.0, le=10.0, description="cap, times body weight")
+
+    def scale_at(self, env_steps: int) -> float:
+        return self.strength * max(0.0, 1.0 - env_steps / self.anneal_steps)
+
+
+class EnvOptions(BaseModel):
+    """Environment settings that are not plugins (plugins configure the rest)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    num_envs: int = Field(256, ge=1, le=65536, description="environments stepped together")
+    privileged_offsets: tuple[Annotated[int, Field(ge=1, le=3600)], ...] = Field(
+        (1, 3, 6),
+        max_length=64,
+        description="future reference frames the critic sees (asymmetric critic)",
+    )
+    reset_lift: float = Field(
+        0.02, ge=0, le=1, description="root lift at reset, m (kinematic feet penetrate a bit)"
+    )
+    groups: dict[str, list[str]] | None = Field(
+        None,
+        description="observation groups: name -> sources (sensor/observer names, 'proprio', "
+        "'privileged'); default actor = sensors + proprio + observers, critic = actor + "
+        "privileged",
+    )
+    curriculum: CurriculumOptions | None = Field(
+        None,
+        description="start episodes where recent failures happened, with a uniform share "
+        "(null: frame-uniform starts); e.g. {uniform: 0.5, bin_seconds: 2}",
+    )
+    root_assist: RootAssistOptions | None = Field(
+        None,
+        description="training only: a root force/torque toward the reference, annealed to "
+        "zero over anneal_steps (null: none); e.g. {strength: 1, anneal_steps: 3000000}",
+    )
