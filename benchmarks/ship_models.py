@@ -25,7 +25,7 @@ from pathlib import Path
 import yaml
 
 from retarget.pretrained import ModelCard
-from retarget.pretrained.package import package
+from retarget.train.package_model import package
 from retarget.train.run_dir import CHECKPOINTS, LOCK, latest_checkpoint, resolve_run
 
 HERE = Path(__file__).resolve().parent

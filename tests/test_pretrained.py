@@ -15,9 +15,9 @@ import retarget.pretrained as pretrained
 from retarget.cli.main import main
 from retarget.errors import RetargetError
 from retarget.pretrained import ModelCard
-from retarget.pretrained.package import package
 from retarget.registry.loader import load_plugins
 from retarget.train.load import load_run
+from retarget.train.package_model import package
 
 SHIPPED = pretrained.names()
 

@@ -28,7 +28,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     from retarget import pretrained
     from retarget.cli.console import out
     from retarget.errors import RetargetError
-    from retarget.pretrained.package import render
+    from retarget.train.package_model import render
 
     if args.action == "list":
         t = Table(title="pretrained models (use as pretrained:NAME)", box=box.SIMPLE_HEAD)

@@ -14,7 +14,7 @@ from retarget.kinds.pose_estimator import PoseEstimator
 if TYPE_CHECKING:
     import torch
 
-    from retarget.registry import Registry
+    from retarget.kinds.lookup import PluginLookup
 
 
 @runtime_checkable
@@ -80,7 +80,7 @@ class Algorithm(Plugin):
         environments (its last observation, episode counters) and draw this rank's own
         randomness from ``generator``. Only algorithms with :attr:`distributed` need it."""
 
-    def prepare_recipe(self, recipe: dict[str, Any], registry: Registry) -> dict[str, Any]:
+    def prepare_recipe(self, recipe: dict[str, Any], registry: PluginLookup) -> dict[str, Any]:
         """Amend a new run's recipe before it is resolved and locked: ``recipe`` is the
         resolved recipe as a plain dict (``ResolvedRecipe.to_dict``); return it, changed or
         not. A distillation algorithm adds the sensors and the observation group its teacher
@@ -91,7 +91,7 @@ class Algorithm(Plugin):
         """
         return recipe
 
-    def connect(self, registry: Registry) -> None:
+    def connect(self, registry: PluginLookup) -> None:
         """Receive the invocation's plugin registry (``retarget.registry.Registry``) before
         :meth:`setup`, for an algorithm that loads other runs (a teacher). Default: unused."""
 

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, ClassVar
 from retarget.kinds.base import Plugin
 
 if TYPE_CHECKING:
-    from retarget.registry import Registry
+    from retarget.kinds.lookup import PluginLookup
 
 
 class Command(Plugin):
@@ -24,7 +24,7 @@ class Command(Plugin):
     def add_arguments(self, parser: argparse.ArgumentParser) -> None:
         """Declare this command's arguments on its own subparser."""
 
-    def connect(self, registry: Registry) -> None:
+    def connect(self, registry: PluginLookup) -> None:
         """Receive the invocation's plugin registry before :meth:`run` (kept as
         ``self.registry``), so a command resolves recipes against the same plugins."""
         self.registry = registry

@@ -37,7 +37,6 @@ from retarget.learn.threads import torch_threads
 
 if TYPE_CHECKING:
     from retarget.kinds import VecEnv
-    from retarget.learn.ppo import PPOLearner
 
 _SAVED = ("actions", "log_probs", "values", "advantages", "returns")
 """What an update reads from a rollout (with the observations)."""
@@ -47,7 +46,9 @@ class OverlapState:
     """The pipeline of one overlapped PPO run: the rollout awaiting its update, the buffer
     the next one is collected into, the acting copy of the networks, the update's generator."""
 
-    def __init__(self, learner: PPOLearner) -> None:
+    def __init__(self, learner: Any) -> None:
+        """``learner``: the :class:`~retarget.learn.ppo.PPOLearner` that owns this pipeline
+        (not named as a type: ``ppo`` imports this module, and this one stays below it)."""
         self.learner = ppo = learner
         self.spare = self._new_storage()
         self.ready: RolloutStorage | None = None

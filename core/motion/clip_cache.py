@@ -20,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from retarget.kinds import MotionFormat
 from retarget.motion.clip import MotionClip
+from retarget.motion.reader import ClipReader
 
 VERSION = 2
 """Bumped when readers map files differently, so old entries are not reused."""
@@ -36,7 +36,7 @@ def clip_cache_dir() -> Path | None:
     return (Path(root) if root else Path.home() / ".cache" / "retarget") / "clips"
 
 
-def clip_key(fmt: MotionFormat, data: bytes) -> str:
+def clip_key(fmt: ClipReader, data: bytes) -> str:
     """Hash of everything a parsed clip depends on."""
     from retarget import __version__
 
@@ -48,7 +48,7 @@ def clip_key(fmt: MotionFormat, data: bytes) -> str:
     return h.hexdigest()[:40]
 
 
-def read_cached(fmt: MotionFormat, path: Path, folder: Path | None) -> MotionClip:
+def read_cached(fmt: ClipReader, path: Path, folder: Path | None) -> MotionClip:
     """``fmt.read(path)``, through the cache when ``folder`` is set and ``fmt`` is cacheable."""
     if folder is None or not getattr(fmt, "cacheable", False):
         return fmt.read(path)

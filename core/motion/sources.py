@@ -17,10 +17,10 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 
 from retarget.errors import MotionError
-from retarget.kinds import MotionFormat
 from retarget.motion.archives import is_archive, unpacked
 from retarget.motion.clip import MotionClip
 from retarget.motion.clip_cache import clip_cache_dir, read_cached
+from retarget.motion.reader import ClipReader
 
 ENV_VAR = "RETARGET_DATA"
 
@@ -76,7 +76,7 @@ def _walk(root: Path) -> list[Path]:
     return out
 
 
-def read_file(path: Path, formats: Mapping[str, MotionFormat]) -> MotionClip:
+def read_file(path: Path, formats: Mapping[str, ClipReader]) -> MotionClip:
     """One motion file read by the format for it, through the clip cache."""
     return read_cached(reader_for(path, formats), path, clip_cache_dir())
 
@@ -91,7 +91,7 @@ def expand(paths: Sequence[str | Path], suffixes: Iterable[str]) -> list[Path]:
     return out
 
 
-def reader_for(path: Path, formats: Mapping[str, MotionFormat]) -> MotionFormat:
+def reader_for(path: Path, formats: Mapping[str, ClipReader]) -> ClipReader:
     """The motion format whose suffixes match ``path`` (and that accepts it, when several
     share the suffix); the error lists the known suffixes."""
     suffix = path.suffix.lower()
@@ -120,7 +120,7 @@ def select(files: Sequence[Path], include: Sequence[str] = (),
 
 def load_motions(
     path: str | Path | None = None,
-    formats: Mapping[str, MotionFormat] | None = None,
+    formats: Mapping[str, ClipReader] | None = None,
     *,
     height: float | None = None,
     include: Sequence[str] = (),
@@ -158,7 +158,7 @@ def load_motions(
 
 
 def read_clip(path: str | Path, *, joints: str | None = None, fps: float | None = None,
-              formats: Mapping[str, MotionFormat] | None = None) -> MotionClip:  # fmt: skip
+              formats: Mapping[str, ClipReader] | None = None) -> MotionClip:  # fmt: skip
     """One motion file read by the format its suffix and content say; ``joints`` (a names
     file) and ``fps`` configure the position-only format for a capture that needs them."""
     path = Path(path)
