@@ -51,6 +51,9 @@ class GoodSensor(retarget.Sensor):
     def spec(self, layout: retarget.Layout) -> retarget.ObsSpec:
         return retarget.ObsSpec((5, 3))
 
+    def frames_needed(self) -> tuple[int, int]:
+        return (2, 2)
+
     def observe(self, ctx: retarget.StepContext) -> torch.Tensor:
         hmd = ctx.ref.devices[:, :, 0, :3]
         now = ctx.ref.window_offsets.index(0)

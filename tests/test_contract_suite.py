@@ -126,6 +126,38 @@ class FussyReset(d.GoodReward):
             raise RuntimeError("can only reset all environments")
 
 
+class StickyReset(d.GoodReward):
+    """Counts steps per environment but ``reset`` forgets to clear the rows it is given."""
+
+    name = "sticky_reset"
+
+    def compute(self, ctx):
+        steps = getattr(self, "steps", torch.zeros(ctx.num_envs))
+        self.steps = steps + 1
+        return super().compute(ctx) + self.steps
+
+    def reset(self, env_ids):
+        pass
+
+
+class NoJointMap(d.GoodCharacter):
+    """Compiles and steps, but has no joint map: nothing can be retargeted onto it."""
+
+    name = "no_joint_map"
+
+    def joint_map(self):
+        return None
+
+
+class UndeclaredWindow(d.GoodSensor):
+    """Reads five frames of the device window but declares it needs none."""
+
+    name = "undeclared_window"
+
+    def frames_needed(self):
+        return (0, 0)
+
+
 class Looping(d.GoodReward):
     """Loops over environments in Python."""
 
@@ -306,10 +338,13 @@ BROKEN = [
     (checks.check_batch_invariance, Coupled),
     (checks.check_deterministic, Random),
     (checks.check_subset_reset, FussyReset),
+    (checks.check_subset_reset, StickyReset),
+    (checks.check_batched_shapes, UndeclaredWindow),
     (checks.check_vectorised, Looping),
     (checks.check_spec, EmptySpec),
     (checks.check_recorded, Unreplayable),
     (checks.check_character_compiles, NoCompile),
+    (checks.check_character_retargets, NoJointMap),
     (checks.check_character_passive_unactuated, ActuatedPassive),
     (checks.check_character_torque_limits, Unlimited),
     (checks.check_character_zero_torque_steps, Unstable),

@@ -116,8 +116,9 @@ class ReferenceBatch:
     ``pose`` is the kinematically retargeted character (same layout as :class:`SimState`),
     ``devices`` the synthesised device poses over the sensor time window
     ``(N, W, D, 7)`` (D devices: headset, left, right; position + wxyz quaternion), with
-    ``window_offsets`` the frame offsets of the W entries (0 is now). ``contacts`` are the
-    reference contact labels of the character's ``contact`` body group. What only some
+    ``window_offsets`` the frame offsets of the W entries (0 is now). ``contacts`` ``(N, 2)``
+    are the human reference's foot-contact labels (left, right), from the clip, whatever the
+    character's feet. What only some
     plugins read is gathered when one of them :meth:`~retarget.kinds.step.StepPlugin.needs`
     it: ``future`` and ``scene_contacts``.
     """
@@ -125,7 +126,7 @@ class ReferenceBatch:
     pose: SimState
     devices: torch.Tensor  # (N, W, D, 7)
     window_offsets: tuple[int, ...]
-    contacts: torch.Tensor  # (N, C) bool
+    contacts: torch.Tensor  # (N, 2) bool: left, right foot of the human reference
     future: Mapping[int, SimState] = field(default_factory=dict)
     """The reference state ``k`` frames ahead, for each offset ``k`` some plugin asked for in
     ``needs().reference_offsets`` (clamped at the clip's last frame)."""

@@ -191,7 +191,7 @@ def check_batched_shapes(plugin: object) -> None:
     layout = tiny_world().layout
     for n in BATCH_SIZES:
         inst = _bound(plugin, layout)
-        ctx = fake_context(layout, n, seed=n, future_offsets=_future(plugin))
+        ctx = _context(plugin, layout, n, n)
         out = _run(inst, kind, ctx)
         shape, dtype = _expected(inst, kind, layout)
         assert isinstance(out, torch.Tensor), f"returned {type(out).__name__}, not a tensor"
@@ -205,10 +205,24 @@ def _future(plugin: object) -> tuple[int, ...]:
     return tuple(inst.needs().reference_offsets) or (1, 2, 3)
 
 
+def _window(plugin: object, layout) -> tuple[int, ...]:
+    """The device window the environment gathers for this plugin alone: a bound sensor's
+    ``frames_needed()`` (past, future) as offsets, as ``RetargetEnv`` sizes it."""
+    inst = _bound(plugin, layout)
+    past, future = inst.frames_needed() if hasattr(inst, "frames_needed") else (0, 0)
+    return tuple(range(-int(past), int(future) + 1))
+
+
+def _context(plugin: object, layout, n: int, seed: int):
+    """A fake step shaped for ``plugin``: its future offsets and its device window."""
+    return fake_context(layout, n, seed=seed, future_offsets=_future(plugin),
+                        window_offsets=_window(plugin, layout))  # fmt: skip
+
+
 def check_finite(plugin: object) -> None:
     kind = kind_of(plugin)
     layout = tiny_world().layout
-    ctx = fake_context(layout, 7, seed=3, future_offsets=_future(plugin))
+    ctx = _context(plugin, layout, 7, 3)
     out = _run(_bound(plugin, layout), kind, ctx)
     if out.is_floating_point():
         assert torch.isfinite(out).all(), "output has NaN or Inf on valid input"
@@ -218,7 +232,7 @@ def check_batch_invariance(plugin: object) -> None:
     """Computing a subset of environments equals slicing the whole: no coupling across envs."""
     kind = kind_of(plugin)
     layout = tiny_world().layout
-    ctx = fake_context(layout, 7, seed=11, future_offsets=_future(plugin))
+    ctx = _context(plugin, layout, 7, 11)
     full = _run(_bound(plugin, layout), kind, ctx)
     idx = torch.tensor([1, 3, 4, 6])
     part = _run(_bound(plugin, layout), kind, ctx.select(idx))
@@ -233,7 +247,7 @@ def check_batch_invariance(plugin: object) -> None:
 def check_deterministic(plugin: object) -> None:
     kind = kind_of(plugin)
     layout = tiny_world().layout
-    ctx = fake_context(layout, 4, seed=5, future_offsets=_future(plugin))
+    ctx = _context(plugin, layout, 4, 5)
     a = _run(_bound(plugin, layout), kind, ctx)
     b = _run(_bound(plugin, layout), kind, ctx)
     assert torch.equal(a, b), "two fresh instances disagree on the same input"
@@ -243,11 +257,17 @@ def check_subset_reset(plugin: object) -> None:
     kind = kind_of(plugin)
     layout = tiny_world().layout
     inst = _bound(plugin, layout)
-    ctx = fake_context(layout, 7, seed=2, future_offsets=_future(plugin))
+    ctx = _context(plugin, layout, 7, 2)
     _run(inst, kind, ctx)
-    inst.reset(torch.tensor([0, 5]))
+    rows = torch.tensor([0, 5])
+    inst.reset(rows)
     out = _run(inst, kind, ctx)
     assert out.shape[0] == 7, "after reset(subset) the batch size changed"
+    fresh = _run(_bound(plugin, layout), kind, ctx)
+    same = (torch.equal(out[rows], fresh[rows]) if not out.is_floating_point()
+            else torch.allclose(out[rows], fresh[rows], atol=1e-5, rtol=1e-5))  # fmt: skip
+    assert same, ("rows reset with reset(env_ids) differ from a fresh instance's on the same "
+                  "step: reset must clear every per-environment state of those rows")
 
 
 def check_vectorised(plugin: object) -> None:
@@ -255,7 +275,7 @@ def check_vectorised(plugin: object) -> None:
     kind = kind_of(plugin)
     layout = tiny_world().layout
     inst = _bound(plugin, layout)
-    ctx = fake_context(layout, GUARD_BATCH, seed=7, future_offsets=_future(plugin))
+    ctx = _context(plugin, layout, GUARD_BATCH, 7)
     with NoPerEnvLoops(GUARD_BATCH):
         _run(inst, kind, ctx)
 
@@ -293,6 +313,25 @@ def check_character_compiles(plugin: object) -> None:
     world = _world(plugin)
     assert world.model.nu > 0, "a character needs at least one actuator"
     assert world.layout.num_bodies > 1, "a character needs more than a root body"
+
+
+def check_character_retargets(plugin: object) -> None:
+    """The character has a joint map and a generated walk retargets onto it as
+    ``retarget train`` does (finite poses inside the joint limits)."""
+    import numpy as np
+
+    from retarget.character.kinematic import retarget_clip
+    from retarget.motion.procedural import default_motions
+
+    inst = make(plugin)
+    joint_map = inst.joint_map()
+    assert joint_map is not None, ("joint_map() returns None: a character needs a joint map "
+                                   "to be trained on human motion (retarget.character.joint_map)")
+    world = _world(plugin)
+    walk = next(c for c in default_motions() if c.name.startswith("walk"))
+    motion = retarget_clip(walk, world.model, joint_map)
+    assert motion.qpos.shape == (walk.num_frames, world.model.nq), "retargeted poses' shape"
+    assert np.isfinite(motion.qpos).all(), "retargeting a generated walk gives NaN/Inf poses"
 
 
 def check_character_passive_unactuated(plugin: object) -> None:
@@ -561,6 +600,7 @@ BY_KIND: dict[str, tuple[Check, ...]] = {
     "observer": (check_spec, check_recorded, *STEP),
     "character": (
         check_character_compiles,
+        check_character_retargets,
         check_character_passive_unactuated,
         check_character_torque_limits,
         check_character_zero_torque_steps,

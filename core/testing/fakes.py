@@ -22,6 +22,7 @@ from retarget.scene.floor import add_floor
 from retarget.sim.world import World, build_world
 
 if TYPE_CHECKING:
+    from retarget.character.joint_map import JointMap
     from retarget.motion.library import MotionLibrary
 
 _CAPSULE = mujoco.mjtGeom.mjGEOM_CAPSULE
@@ -123,6 +124,13 @@ class TinyCharacter(Character):
             "spine": ["torso"],
         }
 
+    def joint_map(self) -> JointMap:
+        """Spine, shoulders and hips follow the human's; the tail stays passive."""
+        from retarget.character.joint_map import JointLink, JointMap
+
+        return JointMap(links={name: JointLink(human=(name,)) for name in (
+            "spine", "left_shoulder", "right_shoulder", "left_hip", "right_hip")})  # fmt: skip
+
     def passive_joints(self) -> Sequence[str]:
         return ("tail_swing",)
 
@@ -219,12 +227,11 @@ def fake_context(
         ],
         dim=-1,
     )
-    feet = len(layout.body_groups.get("feet", ()))
     ref = ReferenceBatch(
         pose=_fake_state(layout, num_envs, g),
         devices=devices,
         window_offsets=window_offsets,
-        contacts=torch.rand(num_envs, feet, generator=g) > 0.5,
+        contacts=torch.rand(num_envs, 2, generator=g) > 0.5,  # left, right foot
         future={k: _fake_state(layout, num_envs, g) for k in sorted(set(future_offsets))},
         scene_contacts=torch.rand(num_envs, len(layout.body_groups), generator=g) > 0.5,
         rows=torch.randint(0, int(FAKE_LIBRARY_SECONDS * 36), (num_envs,), generator=g),
