@@ -11,6 +11,7 @@ from __future__ import annotations
 from retarget.errors import MotionError, PluginError, RecipeError, RetargetError, SimulationError
 from retarget.kinds import (
     Algorithm,
+    Callback,
     Character,
     Command,
     MotionFormat,
@@ -36,6 +37,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "Algorithm",
+    "Callback",
     "Character",
     "Command",
     "Layout",

@@ -155,6 +155,15 @@ class GoodCommand(retarget.Command):
         return 0
 
 
+class GoodCallback(retarget.Callback):
+    """Counts the iterations it is told of."""
+
+    name = "good_callback"
+
+    def on_iteration(self, iteration, env_steps, stats) -> None:
+        self.seen = getattr(self, "seen", 0) + 1
+
+
 GOOD = [
     GoodReward,
     GoodTermination,
@@ -165,6 +174,7 @@ GOOD = [
     GoodAlgorithm,
     GoodFormat,
     GoodCommand,
+    GoodCallback,
 ]
 
 
@@ -211,3 +221,8 @@ def register_motion_formats(register) -> None:
 @retarget.hookimpl
 def register_commands(register) -> None:
     register(GoodCommand)
+
+
+@retarget.hookimpl
+def register_callbacks(register) -> None:
+    register(GoodCallback)

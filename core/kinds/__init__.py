@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from retarget.kinds.algorithm import Algorithm, VecEnv
 from retarget.kinds.base import Plugin, PluginConfig
+from retarget.kinds.callback import Callback
 from retarget.kinds.character import REQUIRED_GROUPS, REQUIRED_SITES, Character
 from retarget.kinds.command import Command
 from retarget.kinds.motion_format import MotionFormat
@@ -23,6 +24,7 @@ KINDS: dict[str, type[Plugin]] = {
     "algorithm": Algorithm,
     "motion_format": MotionFormat,
     "command": Command,
+    "callback": Callback,
 }
 """Kind name -> base class. The registry, recipes and contract suite are all keyed by these."""
 
@@ -31,6 +33,7 @@ __all__ = [
     "REQUIRED_GROUPS",
     "REQUIRED_SITES",
     "Algorithm",
+    "Callback",
     "Character",
     "Command",
     "MotionFormat",

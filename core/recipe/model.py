@@ -81,6 +81,10 @@ class Recipe(Strict):
     rewards: dict[str, ComponentRef] = Field(default_factory=dict)
     terminations: dict[str, ComponentRef] = Field(default_factory=dict)
     algorithm: ComponentRef | None = None
+    callbacks: list[ComponentRef] = Field(
+        default_factory=list, max_length=16,
+        description="training callbacks (loggers) told of every iteration and checkpoint",
+    )
     motions: MotionsSection = Field(default_factory=MotionsSection)
     sim: SimSettings = Field(default_factory=SimSettings)
     env: EnvOptions = Field(default_factory=EnvOptions)
@@ -121,5 +125,6 @@ SLOTS: dict[str, str] = {
     "rewards": "reward",
     "terminations": "termination",
     "algorithm": "algorithm",
+    "callbacks": "callback",
 }
 """Recipe field -> plugin kind of the components it holds."""

@@ -45,7 +45,7 @@ def recipe_schema(registry: Registry) -> dict[str, Any]:
     props = schema["properties"]
     for slot, kind in SLOTS.items():
         ref = {"$ref": f"#/$defs/{kind}_component"}
-        if slot in {"sensors", "observers"}:
+        if slot in {"sensors", "observers", "callbacks"}:
             props[slot] = {"type": "array", "items": ref}
         elif slot in {"rewards", "terminations"}:
             props[slot] = {"type": "object", "additionalProperties": ref}

@@ -81,6 +81,11 @@ def register_commands(register: Registrar) -> None:
     """Register :class:`retarget.kinds.Command` subclasses (extra ``retarget`` subcommands)."""
 
 
+@hookspec
+def register_callbacks(register: Registrar) -> None:
+    """Register :class:`retarget.kinds.Callback` subclasses (training loggers and monitors)."""
+
+
 HOOK_KINDS: dict[str, str] = {
     "register_characters": "character",
     "register_sensors": "sensor",
@@ -91,5 +96,6 @@ HOOK_KINDS: dict[str, str] = {
     "register_algorithms": "algorithm",
     "register_motion_formats": "motion_format",
     "register_commands": "command",
+    "register_callbacks": "callback",
 }
 """Hook name -> plugin kind it registers."""

@@ -576,6 +576,23 @@ def check_command_arguments(plugin: object) -> None:
 
 # ---------------------------------------------------------------- the table
 
+
+def check_callback_events(plugin: object) -> None:
+    """Every event of a short run, with a read-only copy of the statistics, returns quietly
+    (the trainer switches off a callback that raises)."""
+    from types import MappingProxyType
+
+    inst = make(plugin)
+    with tempfile.TemporaryDirectory() as tmp:
+        run = Path(tmp)
+        inst.on_train_start(run, {"character": {"type": "tiny"}}, False)
+        for i in (1, 2):
+            inst.on_iteration(i, 100 * i, MappingProxyType({"loss": 0.5, "odd": float("nan")}))
+        ckpt = run / "checkpoints" / "ckpt-0000002.pt"
+        inst.on_checkpoint(ckpt, 2)
+        inst.on_train_end("budget", ckpt)
+
+
 COMMON: tuple[Check, ...] = (
     check_name,
     check_docstring,
@@ -609,6 +626,7 @@ BY_KIND: dict[str, tuple[Check, ...]] = {
     "algorithm": (check_algorithm_update, check_algorithm_checkpoint),
     "motion_format": (check_motion_format_reads_sample, check_motion_format_rejects_garbage),
     "command": (check_command_arguments,),
+    "callback": (check_callback_events,),
 }
 
 

@@ -19,10 +19,11 @@ import random
 import signal
 import sys
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from types import FrameType
+from types import FrameType, MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -30,13 +31,17 @@ import torch
 
 from retarget.env.build import env_from_recipe
 from retarget.errors import RecipeError, SimulationError
-from retarget.kinds import Algorithm
+from retarget.kinds import Algorithm, Callback
 from retarget.recipe import ResolvedRecipe, write_lock
 from retarget.registry import Registry
 from retarget.train.checkpoint import load_checkpoint, save_checkpoint
 from retarget.train.distributed import SINGLE, Comm
 from retarget.train.logger import MetricsLogger
 from retarget.train.run_dir import CHECKPOINTS, RunLock
+
+
+class CallbackWarning(UserWarning):
+    """A training callback failed and was switched off."""
 
 
 @dataclass
@@ -136,6 +141,23 @@ class Trainer:
             write_lock(resolved, run)
         self._stop_requests = 0
         self._saving = False
+        self.callbacks: list[Callback] = (
+            [c.instantiate() for c in resolved.of_kind("callback")] if comm.main else []
+        )  # fmt: skip
+
+    # ------------------------------------------------------------------ callbacks
+
+    def _notify(self, event: str, *args: Any) -> None:
+        """Tell every callback of ``event``; one that raises is warned about by name and
+        switched off (a logger that fails never stops the training)."""
+        for cb in list(self.callbacks):
+            try:
+                getattr(cb, event)(*args)
+            except Exception as exc:
+                self.callbacks.remove(cb)
+                warnings.warn(f"callback '{cb.name}' raised in {event} ({type(exc).__name__}: "
+                              f"{exc}); it is switched off for the rest of this run",
+                              CallbackWarning, stacklevel=2)  # fmt: skip
 
     # ------------------------------------------------------------------ checkpoints
 
@@ -171,6 +193,7 @@ class Trainer:
                 state["ranks"] = [{k: s[k] for k in ("algorithm", "env", "rng")}
                                   for s in states[1:]]  # fmt: skip
             save_checkpoint(path, state)
+            self._notify("on_checkpoint", path, self.progress.iteration)
         self.comm.barrier()  # no rank runs ahead of a checkpoint still being written
         return path
 
@@ -236,6 +259,10 @@ class Trainer:
         for sig in previous:
             signal.signal(sig, self._request_stop)
         last, saved_at = None, -1
+        if self.callbacks:
+            recipe = self.resolved.recipe.model_dump(mode="json")
+            self._notify("on_train_start", self.run, recipe, self.progress.iteration > 0)
+        ended = "error"
         try:
             start = time.perf_counter() - self.progress.elapsed
             while not self.comm.any(budget.done(self.progress.env_steps, self.progress.elapsed)):
@@ -265,6 +292,9 @@ class Trainer:
                     self.logger.log(
                         p.env_steps, {"iteration": p.iteration, "elapsed_s": p.elapsed, **p.last}
                     )
+                if self.callbacks:
+                    self._notify("on_iteration", p.iteration, p.env_steps,
+                                 MappingProxyType(dict(p.last, elapsed_s=p.elapsed)))
                 if on_iteration is not None:
                     on_iteration(p)
                 if self.comm.any(bool(self._stop_requests)):
@@ -276,7 +306,9 @@ class Trainer:
                     saved_at = p.iteration
             if last is None or saved_at != self.progress.iteration:  # never the same one twice
                 last = self._save_uninterrupted()
+            ended = self.stop_reason
         finally:
+            self._notify("on_train_end", ended, last)
             for sig, handler in previous.items():
                 signal.signal(sig, handler)
             if self.logger is not None:
