@@ -7,10 +7,14 @@ A sensor reads the device window the environment gathers (``ctx.ref.devices``, `
 
 from __future__ import annotations
 
-import torch
+from typing import TYPE_CHECKING
+
 from pydantic import Field
 
 import retarget
+
+if TYPE_CHECKING:  # torch is imported by the env before any step; `retarget --help` stays light
+    import torch
 
 
 class HeadVelocityConfig(retarget.PluginConfig):
