@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 from retarget.env.env import RetargetEnv
 from retarget.kinds import (
@@ -12,6 +13,7 @@ from retarget.kinds import (
     RewardTerm,
     Scene,
     Sensor,
+    StepPlugin,
     Termination,
 )
 from retarget.motion.clip import MotionClip
@@ -61,19 +63,24 @@ def env_from_recipe(
     """
     recipe = resolved.recipe
 
+    def connected(plugin: Any) -> Any:
+        if registry is not None and isinstance(plugin, StepPlugin):
+            plugin.connect(registry)
+        return plugin
+
     def made(kind: str) -> list:
-        return [c.instantiate() for c in resolved.of_kind(kind)]
+        return [connected(c.instantiate()) for c in resolved.of_kind(kind)]
 
     character = resolved.character.instantiate()
     assert isinstance(character, Character)
     scenes = made("scene")
     rewards = {
-        path.split(".", 1)[1]: comp.instantiate()
+        path.split(".", 1)[1]: connected(comp.instantiate())
         for path, comp in resolved.components.items()
         if comp.entry.kind == "reward"
     }
     ends = {
-        path.split(".", 1)[1]: comp.instantiate()
+        path.split(".", 1)[1]: connected(comp.instantiate())
         for path, comp in resolved.components.items()
         if comp.entry.kind == "termination" and terminations
     }

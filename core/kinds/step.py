@@ -17,6 +17,7 @@ from retarget.kinds.base import Plugin
 if TYPE_CHECKING:
     import torch
 
+    from retarget.kinds.lookup import PluginLookup
     from retarget.kinds.state import Layout
     from retarget.motion.library import MotionLibrary
 
@@ -41,6 +42,15 @@ class StepNeeds:
 
 class StepPlugin(Plugin):
     """Base of the plugins that run every control step, on whole batches of environments."""
+
+    registry: PluginLookup | None = None
+    """The invocation's plugins, set by :meth:`connect` when the env is built from a recipe."""
+
+    def connect(self, registry: PluginLookup) -> None:
+        """Receive the invocation's plugin registry before :meth:`bind` (kept as
+        ``self.registry``), so a plugin that builds other plugins (a sensor wrapping an
+        estimator run) resolves them against the same set the recipe was resolved with."""
+        self.registry = registry
 
     def bind(self, layout: Layout) -> None:
         """Resolve names to indices once, before the first step."""

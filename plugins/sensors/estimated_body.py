@@ -52,7 +52,7 @@ class EstimatedBody(Sensor):
 
         cfg = self.config
         assert isinstance(cfg, EstimatedBodyConfig)
-        registry = retarget.load_plugins()
+        registry = self.registry or retarget.load_plugins()  # the recipe's, when connected
         if cfg.estimator is None:
             cls = registry.get("sensor", "three_point").cls
             self._inner = [cls(cls.Config.model_validate({"past": 2}))]
