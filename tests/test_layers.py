@@ -20,6 +20,8 @@ FORBIDDEN = {
     "settings": {"env", "sim", "recipe", "registry", "train", "cli", "plugins"},
     "registry": {"motion", "env", "train", "cli", "plugins"},
     "commands": {"cli"},
+    "train": {"cli", "plugins"},
+    "env": {"cli", "train", "plugins"},
     "plugins": {"cli"},
 }
 """Room -> rooms it must never import (the arrows that would point up)."""

@@ -282,15 +282,15 @@ def test_extends_a_named_recipe_a_file_and_refuses_loops(tmp_path) -> None:
 
 
 def test_default_run_names_say_what_differs(tmp_path) -> None:
-    from retarget.cli.train_cmd import _default_name
     from retarget.recipe import load
     from retarget.registry.loader import load_plugins
+    from retarget.train.start import run_name
 
     registry = load_plugins()
 
     def name(recipe, **shorthands):
         r = load(recipe, registry, shorthands=shorthands, assignments=[])
-        return _default_name(r, [c.entry.name for c in r.of_kind("sensor")])
+        return run_name(r, [c.entry.name for c in r.of_kind("sensor")])
 
     mine = tmp_path / "stairs.yaml"
     mine.write_text("character: dino\nsensors: [hmd]\n")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 from collections.abc import Iterator
 from contextlib import AbstractContextManager, contextmanager, nullcontext
 from pathlib import Path
@@ -11,18 +10,11 @@ from typing import TYPE_CHECKING, Any
 
 from retarget.commands.numbers import amount, count
 from retarget.commands.recipe_args import add_recipe_flags, load_from_args
-from retarget.errors import RecipeError
 from retarget.registry import Registry
-from retarget.train.run_dir import (
-    LOCK,
-    default_run_name,
-    latest_checkpoint,
-    resolve_run,
-    starting_run,
-)
+from retarget.train.run_dir import latest_checkpoint, resolve_run, starting_run
+from retarget.train.start import DEFAULT_SETTINGS
 
 if TYPE_CHECKING:
-    from retarget.recipe import ResolvedRecipe
     from retarget.train.distributed import Comm
 
 
@@ -89,74 +81,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     parser.set_defaults(handler=run)
 
 
-SETTINGS = "train_settings.json"
-"""How a run trains beyond its recipe (checkpoint interval, logging), kept by ``--resume``."""
-DEFAULT_SETTINGS: dict[str, Any] = {"checkpoint_every": 10, "tensorboard": True}
-
-
-def run_settings(run_dir: Path, given: dict[str, Any], *, resume: bool) -> dict[str, Any]:
-    """The run's settings: flags given now, else what the run recorded (on ``--resume``), else
-    the defaults; written back so the next resume keeps them."""
-    path = run_dir / SETTINGS
-    recorded: dict[str, Any] = {}
-    if resume and path.exists():
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise RecipeError(f"cannot read the run's settings: {exc}", file=str(path)) from None
-        every = data.get("checkpoint_every") if isinstance(data, dict) else None
-        tb = data.get("tensorboard") if isinstance(data, dict) else None
-        if not (isinstance(every, int) and 1 <= every <= 10**6 and isinstance(tb, bool)):
-            raise RecipeError(
-                "the run's settings must be {checkpoint_every: 1..1000000, tensorboard: bool}",
-                file=str(path),
-            )
-        recorded = {"checkpoint_every": every, "tensorboard": tb}
-    settings = {
-        key: given[key] if given.get(key) is not None else recorded.get(key, default)
-        for key, default in DEFAULT_SETTINGS.items()
-    }
-    path.write_text(json.dumps(settings) + "\n", encoding="utf-8")
-    return settings
-
-
-def _default_name(resolved: ResolvedRecipe, sensors: list[str]) -> str:
-    from retarget.recipe.defaults import is_packaged
-
-    character = resolved.character.entry.name
-    stem = Path(resolved.source.path).stem
-    packaged_default = is_packaged(resolved.source.path) and stem in ("default", character)
-
-    def names(kind: str) -> list[str]:
-        return [c.entry.name for c in resolved.of_kind(kind)]
-
-    scenes, algorithms = names("scene"), names("algorithm")
-    return default_run_name(
-        character,
-        sensors,
-        recipe=None if packaged_default else stem.removeprefix(f"{character}_"),
-        scene=scenes[0] if scenes else None,
-        observers=names("observer"),
-        algorithm=algorithms[0] if algorithms else None,
-    )
-
-
-def _resume_recipe(run: Path, registry: Registry, threads: int | None):
-    """The run's locked recipe; ``--threads`` (only the speed changes) is recorded in it."""
-    from retarget.cli.console import warning
-    from retarget.train.load import locked_recipe
-    changes = [f"sim.threads={threads}"] if threads is not None else []
-    resolved, lock = locked_recipe(run, registry, assignments=changes)
-    for path, info in lock.get("plugins", {}).items():
-        comp = resolved.components.get(path)
-        if comp is not None and comp.entry.version != info.get("version"):
-            warning(
-                f"{path}: plugin '{comp.entry.name}' is {comp.entry.distribution} "
-                f"{comp.entry.version}, the run started with {info.get('version')}"
-            )
-    return resolved
-
-
 def _budget(args: argparse.Namespace, done: Any) -> Any:
     """The stopping point: with --resume the budget is on top of what the run has done."""
     from retarget.train.runner import Budget
@@ -209,63 +133,40 @@ def _train(args: argparse.Namespace, registry: Registry, comm: Comm) -> int:
         TimeRemainingColumn,
     )
 
-    from retarget.cli.console import out
+    from retarget.cli.console import out, warning
     from retarget.train.load import prepared_recipe
     from retarget.train.runner import Trainer
+    from retarget.train.start import (
+        check_start,
+        resume_recipe,
+        run_name,
+        run_settings,
+        start_assignments,
+    )
     from retarget.train.warm_start import INIT_FROM, warm_start
     if comm.distributed and comm.main:
         out.print(f"data-parallel: {comm.size} ranks, {comm.local_size} on this machine")
     if args.steps is None and args.minutes is None and comm.main:
         out.print("no --steps or --minutes given: training until Ctrl-C (checkpoint on exit)")
     given = {"checkpoint_every": args.checkpoint_every, "tensorboard": args.tensorboard}
-    if args.teacher and args.expert:
-        raise RecipeError("--teacher and --expert are two ways to learn; use one of them")
-    if args.resume and (args.init_from or args.teacher or args.expert):
-        raise RecipeError(
-            "--resume continues a run with its own weights and recipe; --init-from and "
-            "--teacher/--expert start a new one",
-            hint="use one of them",
-        )
+    check_start(resume=args.resume, init_from=bool(args.init_from),
+                teacher=bool(args.teacher), expert=bool(args.expert),
+                recipe_changes=bool(args.recipe or args.assignments),
+                num_envs=args.num_envs is not None)  # fmt: skip
     if args.resume:
         run_dir = resolve_run(args.resume)
-        if args.recipe or args.assignments:
-            raise RecipeError(
-                "--resume continues with the run's own recipe.lock.yaml; "
-                "recipe files and --set do not apply",
-                file=str(run_dir / LOCK),
-            )
-        if args.num_envs is not None:
-            raise RecipeError(
-                "--resume continues with the run's own environment count",
-                file=str(run_dir / LOCK),
-                hint="drop --num-envs (a checkpoint holds every environment's state)",
-            )
-        resolved = _resume_recipe(run_dir, registry, args.threads)
+        resolved, moved = resume_recipe(run_dir, registry, args.threads)
+        for line in moved:
+            warning(line)
         context: AbstractContextManager[Path] = nullcontext(run_dir)
     else:
-        # shorthands are recipe overrides, so recipe.lock.yaml records exactly what ran
-        flags = []
-        if args.teacher:
-            teacher = json.dumps({"type": "dagger", "teacher": str(args.teacher)})
-            flags.append(f"algorithm={teacher}")
-        if args.expert:
-            expert = json.dumps({"type": "expert_bc", "expert": str(Path(args.expert).resolve())})
-            flags.append(f"algorithm={expert}")
-        if args.num_envs is not None:
-            flags.append(f"env.num_envs={args.num_envs}")
-        if args.threads is not None:
-            flags.append(f"sim.threads={args.threads}")
-        args.assignments = [*flags, *args.assignments]
+        args.assignments = [*start_assignments(teacher=args.teacher, expert=args.expert,
+                                               num_envs=args.num_envs, threads=args.threads),
+                            *args.assignments]  # fmt: skip
         resolved = prepared_recipe(load_from_args(args, registry), registry)
-        groups = resolved.recipe.env.groups or {}
-        seen = [  # the sensors the policy reads (a teacher's own are not in its name)
-            c.entry.name
-            for c in resolved.of_kind("sensor")
-            if "actor" not in groups or c.entry.name in groups["actor"]
-        ]
-        name = resolved.recipe.name or _default_name(resolved, seen)
         # only rank 0 creates it; removed again if the start fails
-        context = starting_run(args.runs_dir, name) if comm.main else nullcontext(Path())
+        context = (starting_run(args.runs_dir, run_name(resolved)) if comm.main
+                   else nullcontext(Path()))  # fmt: skip
     with _rank_run_dir(comm, context) as run_dir:
         settings = comm.broadcast(
             run_settings(run_dir, given, resume=bool(args.resume)) if comm.main else None
