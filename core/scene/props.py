@@ -115,15 +115,22 @@ class Randomization(PluginConfig):
     height: float = Field(0.0, ge=0, description="max vertical offset, metres")
 
 
-class PropSceneConfig(PluginConfig):
-    """What every primitive scene accepts: where it stands and how it is randomized."""
+class PropSetConfig(PluginConfig):
+    """What every prop scene's config has: the props' density and their randomization.
+    Scenes that place their props themselves (per clip, along a path) derive from this."""
+
+    density: float = Field(500.0, gt=0, description="kg/m^3 of every part (uniform density)")
+    randomize: Randomization = Field(default_factory=Randomization)
+
+
+class PropSceneConfig(PropSetConfig):
+    """A scene placed as a whole: where it stands (``position``, ``yaw``), plus density and
+    randomization."""
 
     position: tuple[float, float] = Field((0.0, 1.2), description="world x, y of the prop")
     yaw: float = Field(
         -math.pi / 2, description="rotation about +Z, radians (default: front faces the origin)"
     )
-    density: float = Field(500.0, gt=0, description="kg/m^3 of every part (uniform density)")
-    randomize: Randomization = Field(default_factory=Randomization)
 
 
 @dataclass
@@ -171,6 +178,12 @@ class PropScene(Scene):
     def __init__(self, config: PluginConfig | None = None) -> None:
         import torch
         super().__init__(config)
+        if not isinstance(self.config, PropSetConfig):
+            raise PluginError(
+                f"{type(self).__name__}.Config must derive from PropSetConfig (density, "
+                "randomize) or PropSceneConfig (and position, yaw)", plugin=f"scene {self.name}",
+            )
+        self.props_config: PropSetConfig = self.config
         self._props = self.placed_props()
         names = [p.name for p in self._props]
         if len(set(names)) != len(names):
@@ -187,13 +200,14 @@ class PropScene(Scene):
 
     def placed_props(self) -> list[Prop]:
         cfg = self.config
-        xy = tuple(getattr(cfg, "position", (0.0, 0.0)))
-        yaw = float(getattr(cfg, "yaw", 0.0))
+        placed = isinstance(cfg, PropSceneConfig)
+        xy = tuple(cfg.position) if placed else (0.0, 0.0)
+        yaw = float(cfg.yaw) if placed else 0.0
         return [p.moved(xy, yaw) for p in self.props()]  # type: ignore[arg-type]
 
     @property
     def randomization(self) -> Randomization:
-        return getattr(self.config, "randomize", Randomization(position=0, yaw=0))
+        return self.props_config.randomize
 
     # ---------------------------------------------------------------- building
 
@@ -206,7 +220,7 @@ class PropScene(Scene):
 
         from retarget.geometry.heading import yaw_quat
         add_floor(spec)
-        density = float(getattr(self.config, "density", 500.0))
+        density = float(self.props_config.density)
         for prop in self._props:
             body = spec.worldbody.add_body(
                 name=self.body_name(prop),

@@ -33,7 +33,7 @@ from pydantic import Field, ValidationError
 import retarget
 from retarget.errors import PluginError
 from retarget.kinds import PluginConfig
-from retarget.scene.props import Prop, PropScene, Randomization, box
+from retarget.scene.props import Prop, PropScene, PropSetConfig, box
 
 if TYPE_CHECKING:
     from retarget.motion.clip import MotionClip
@@ -54,7 +54,7 @@ class ClipProps(PluginConfig):
     props: tuple[PropSpec, ...] = ()
 
 
-class MotionPropsConfig(PluginConfig):
+class MotionPropsConfig(PropSetConfig):
     clips: dict[str, tuple[PropSpec, ...]] = Field(
         default_factory=dict, description="clip name -> its props (wins over sidecar and auto)"
     )
@@ -69,8 +69,6 @@ class MotionPropsConfig(PluginConfig):
         description="a mesh box whose top is within this many metres of where the clip's feet "
         "rest on it is moved to meet them (a capture and its scan disagree by centimetres)",
     )  # fmt: skip
-    density: float = Field(500.0, gt=0, description="kg/m^3 of every part (uniform density)")
-    randomize: Randomization = Field(default_factory=Randomization)
 
 
 def sidecar_path(source: Path) -> Path:

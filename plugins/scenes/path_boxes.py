@@ -25,7 +25,7 @@ from pydantic import Field, model_validator
 
 import retarget
 from retarget.kinds import PluginConfig
-from retarget.scene.props import Prop, PropScene, Randomization, box
+from retarget.scene.props import Prop, PropScene, PropSetConfig, Randomization, box
 
 if TYPE_CHECKING:
     import torch
@@ -36,7 +36,7 @@ PARK = (-50.0, -50.0)
 """Where boxes stand in the compiled model and when unused: far from any motion."""
 
 
-class PathBoxesConfig(PluginConfig):
+class PathBoxesConfig(PropSetConfig):
     count: int = Field(4, ge=1, le=64, description="boxes per episode")
     height: tuple[float, float] = Field((0.05, 0.25), description="min, max box height, metres")
     size: tuple[float, float] = Field(
