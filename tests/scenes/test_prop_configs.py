@@ -31,5 +31,5 @@ def test_a_prop_scene_with_a_foreign_config_is_refused() -> None:
         name = "odd_stool"
         Config = Loose
 
-    with pytest.raises(PluginError, match="odd_stool.*PropSetConfig"):
+    with pytest.raises(PluginError, match=r"odd_stool.*PropSetConfig"):
         Odd()
