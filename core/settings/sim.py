@@ -57,3 +57,10 @@ class SimSettings(BaseModel):
     @property
     def control_dt(self) -> float:
         return 1.0 / self.control_hz
+
+
+ACTION_PHYSICS: tuple[str, ...] = ("control_hz", "substeps", "actuation", "pd_saturation",
+                                   "pd_damping")  # fmt: skip
+"""The ``sim`` settings an action's meaning depends on: a policy's (or an expert's) actions
+replayed or imitated under other values of these do something else, so a student must match
+its teacher's or expert's on every one."""

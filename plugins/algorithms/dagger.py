@@ -19,13 +19,14 @@ from typing import TYPE_CHECKING, Any
 import retarget
 from retarget import Algorithm, PluginError, RecipeError, VecEnv
 from retarget.learn.config import DaggerConfig
+from retarget.settings.sim import ACTION_PHYSICS
 
 if TYPE_CHECKING:
     import torch
 
     from retarget.learn.dagger import DaggerLearner
 
-PHYSICS = ("control_hz", "substeps", "actuation", "pd_saturation", "pd_damping")
+PHYSICS = ACTION_PHYSICS
 """Simulation settings a teacher's actions depend on: they must match the student's."""
 
 

@@ -18,13 +18,15 @@ from typing import TYPE_CHECKING, Any
 import retarget
 from retarget import Algorithm, PluginError, RecipeError, VecEnv
 from retarget.learn.config import ExpertBCConfig
+from retarget.settings.sim import ACTION_PHYSICS
 
 if TYPE_CHECKING:
     import torch
 
     from retarget.learn.expert_bc import ExpertBCLearner
 
-PHYSICS = ("control_hz", "substeps", "actuation", "pd_saturation", "pd_damping")
+PHYSICS = ACTION_PHYSICS
+"""Simulation settings the expert's actions depend on: the student takes the expert's."""
 
 
 class ExpertBC(Algorithm):
