@@ -87,3 +87,15 @@ def test_the_plugin_in_20_lines_beside_the_installed_example(make_dist, capsys) 
     module = __import__(f"head_height_{suffix}")
     for check in checks.checks_for(module.HeadHeight, installed=False):
         check(module.HeadHeight)  # the contract suite, as the README's own test runs it
+
+
+def test_the_callbacks_example_is_a_valid_recipe_and_its_variant_too(tmp_path) -> None:
+    (block,) = [b for b in _blocks("yaml") if "callbacks:" in b]
+    registry = load_plugins()
+    for i, text in enumerate((block, block.replace("[events]", "[{type: events, every: 10}]"))):
+        path = tmp_path / f"cb{i}.yaml"
+        path.write_text(text)
+        resolved = load(str(path), registry, shorthands={}, assignments=[])
+        (cb,) = resolved.of_kind("callback")
+        assert cb.entry.name == "events"
+        assert cb.config.every == (1, 10)[i]
