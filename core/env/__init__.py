@@ -8,12 +8,12 @@ from retarget.lazy import lazy_exports
 
 if TYPE_CHECKING:
     from retarget.env.env import RetargetEnv, random_actions
-    from retarget.env.options import EnvOptions
+    from retarget.settings.env import EnvOptions
 
 __getattr__ = lazy_exports(
     __name__,
     {
-        "EnvOptions": "retarget.env.options",
+        "EnvOptions": "retarget.settings.env",
         "RetargetEnv": "retarget.env.env",
         "random_actions": "retarget.env.env",
     },

@@ -36,7 +36,6 @@ from retarget.env.curriculum import FailureCurriculum
 from retarget.env.managers import RewardManager, TerminationManager
 from retarget.env.observation_manager import ObservationManager, PluginSource
 from retarget.env.observations import Privileged, Proprio
-from retarget.env.options import EnvOptions
 from retarget.env.reference import CharacterReference
 from retarget.env.root_assist import RootAssist
 from retarget.errors import PluginError
@@ -46,6 +45,7 @@ from retarget.kinds.step import StepNeeds, StepPlugin
 from retarget.motion.clip import MotionClip
 from retarget.motion.library import MotionLibrary
 from retarget.motion.resample import resample
+from retarget.settings.env import EnvOptions
 from retarget.sim import SimSettings, make_sim
 from retarget.sim.world import build_world
 

@@ -7,10 +7,10 @@ from typing import TYPE_CHECKING
 from retarget.lazy import lazy_exports
 
 if TYPE_CHECKING:
+    from retarget.settings.sim import SimSettings
     from retarget.sim.actuation import apply_actuation, describe_actuation
     from retarget.sim.backend import make_sim
     from retarget.sim.batched import BatchedSim
-    from retarget.sim.settings import SimSettings
 
 __getattr__ = lazy_exports(
     __name__,
@@ -19,7 +19,7 @@ __getattr__ = lazy_exports(
         "describe_actuation": "retarget.sim.actuation",
         "BatchedSim": "retarget.sim.batched",
         "make_sim": "retarget.sim.backend",
-        "SimSettings": "retarget.sim.settings",
+        "SimSettings": "retarget.settings.sim",
     },
 )
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from retarget.sim.settings import ACTUATIONS, Actuation
+from retarget.settings.sim import ACTUATIONS, Actuation
 
 
 def apply_actuation(

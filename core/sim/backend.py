@@ -5,8 +5,8 @@ from __future__ import annotations
 import mujoco
 
 from retarget.kinds.state import Layout
+from retarget.settings.sim import SimSettings
 from retarget.sim.batched import BatchedSim
-from retarget.sim.settings import SimSettings
 
 
 def make_sim(

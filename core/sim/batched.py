@@ -23,8 +23,8 @@ import torch
 from mujoco.batch import Batch
 
 from retarget.kinds.state import Layout, SimState
+from retarget.settings.sim import SimSettings
 from retarget.sim.actuation import apply_actuation
-from retarget.sim.settings import SimSettings
 
 T = TypeVar("T")
 

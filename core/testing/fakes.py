@@ -298,9 +298,9 @@ def kinematic_env():
     """A real one-environment human env with a three-point sensor (4-frame window) over two
     seconds of generated walking: what kinematic algorithms (pose estimators) are checked on."""
     from retarget.env import RetargetEnv
-    from retarget.env.options import EnvOptions
     from retarget.motion.procedural import default_motions
     from retarget.registry.loader import load_plugins
+    from retarget.settings.env import EnvOptions
 
     registry = load_plugins()
     human = registry.get("character", "human").cls()

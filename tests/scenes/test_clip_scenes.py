@@ -13,12 +13,12 @@ import trimesh
 from helpers import REPO
 
 from retarget.env import RetargetEnv
-from retarget.env.options import EnvOptions
 from retarget.motion import skeleton as sk
 from retarget.motion.procedural import default_motions
 from retarget.motion.shared_data import shared_data
 from retarget.registry.loader import load_plugins
 from retarget.scene.mesh_boxes import boxes_from_mesh
+from retarget.settings.env import EnvOptions
 
 BOX_CLIMB = shared_data("scenes/box_climb")
 NAMES = REPO / "examples" / "layouts" / "box_climb_joints.txt"
