@@ -17,8 +17,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import retarget
-from retarget import Algorithm, PluginError, RecipeError, VecEnv
+from retarget import PluginError, RecipeError, VecEnv
 from retarget.learn.config import DaggerConfig
+from retarget.learn.delegating import LearnerAlgorithm
 from retarget.settings.sim import ACTION_PHYSICS
 
 if TYPE_CHECKING:
@@ -45,7 +46,7 @@ def _actor_sources(recipe: Mapping[str, Any], group: str = "actor") -> list[str]
     return [*_names(recipe.get("sensors", [])), "proprio", *_names(recipe.get("observers", []))]
 
 
-class Dagger(Algorithm):
+class Dagger(LearnerAlgorithm):
     """Online distillation (DAgger): the student acts, a frozen teacher run labels its states.
 
     The student reads the ``actor`` group (e.g. headset + controllers), the teacher its own
@@ -185,11 +186,6 @@ class Dagger(Algorithm):
         if self._teacher_factory is not None:
             self.learner.set_teacher(self._teacher_factory(self._teacher_dim, env.action_dim))
 
-    def _ready(self) -> DaggerLearner:
-        if self.learner is None:
-            raise RuntimeError("dagger: setup(env) must be called first")
-        return self.learner
-
     def _load_teacher(self) -> None:
         """The teacher run's deployable policy, loaded once, when training starts (acting,
         evaluating and exporting a student never need it)."""
@@ -223,19 +219,6 @@ class Dagger(Algorithm):
         if learner.teacher is None:
             self._load_teacher()
         return learner.train_iteration(env)
-
-    def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
-        return self._ready().act(obs)
-
-    def policy(self) -> tuple[str, torch.nn.Module]:
-        learner = self._ready()
-        return learner.actor_key, learner.deployable_policy()
-
-    def state_dict(self) -> dict[str, Any]:
-        return self._ready().state_dict()
-
-    def load_state_dict(self, state: Mapping[str, Any]) -> None:
-        self._ready().load_state_dict(state)
 
     def fresh_rank(self, generator: torch.Generator) -> None:
         self._ready().fresh_rank(generator)

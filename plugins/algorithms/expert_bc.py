@@ -16,8 +16,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import retarget
-from retarget import Algorithm, PluginError, RecipeError, VecEnv
+from retarget import PluginError, RecipeError, VecEnv
 from retarget.learn.config import ExpertBCConfig
+from retarget.learn.delegating import LearnerAlgorithm
 from retarget.settings.sim import ACTION_PHYSICS
 
 if TYPE_CHECKING:
@@ -29,7 +30,7 @@ PHYSICS = ACTION_PHYSICS
 """Simulation settings the expert's actions depend on: the student takes the expert's."""
 
 
-class ExpertBC(Algorithm):
+class ExpertBC(LearnerAlgorithm):
     """A student learns a tracking expert's actions on the expert's replayed states."""
 
     name = "expert_bc"
@@ -139,29 +140,12 @@ class ExpertBC(Algorithm):
             clips.append(data)
         return ExpertWindows(clips, sim.STATE_FIELDS)
 
-    def _ready(self) -> ExpertBCLearner:
-        if self.learner is None:
-            raise RuntimeError("expert_bc: setup(env) must be called first")
-        return self.learner
-
     def train_iteration(self, env: VecEnv) -> dict[str, float]:
         learner = self._ready()
         if learner.windows is None:
             learner.windows = self._load_windows(env)
         return learner.train_iteration(env)
 
-    def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
-        return self._ready().act(obs)
-
-    def policy(self) -> tuple[str, torch.nn.Module]:
-        learner = self._ready()
-        return learner.actor_key, learner.deployable_policy()
-
-    def state_dict(self) -> dict[str, Any]:
-        return self._ready().state_dict()
-
-    def load_state_dict(self, state: Mapping[str, Any]) -> None:
-        self._ready().load_state_dict(state)
 
 
 @retarget.hookimpl

@@ -6,8 +6,9 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import retarget
-from retarget import Algorithm, PluginError, VecEnv
+from retarget import PluginError, VecEnv
 from retarget.learn.config import PPOConfig
+from retarget.learn.delegating import LearnerAlgorithm
 
 if TYPE_CHECKING:
     import torch
@@ -15,7 +16,7 @@ if TYPE_CHECKING:
     from retarget.learn.ppo import PPOLearner
 
 
-class PPO(Algorithm):
+class PPO(LearnerAlgorithm):
     """Proximal policy optimisation with an asymmetric critic and fixed exploration noise.
 
     The actor reads the ``actor`` observation group, the critic the privileged ``critic``
@@ -52,27 +53,6 @@ class PPO(Algorithm):
             self.config, env.obs_dims, env.action_dim, env.num_envs, generator, residual, images,
             comm=self.comm,
         )
-
-    def _ready(self) -> PPOLearner:
-        if self.learner is None:
-            raise RuntimeError("PPO.setup(env) must be called first")
-        return self.learner
-
-    def train_iteration(self, env: VecEnv) -> dict[str, float]:
-        return self._ready().train_iteration(env)
-
-    def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
-        return self._ready().act(obs)
-
-    def policy(self) -> tuple[str, torch.nn.Module]:
-        learner = self._ready()
-        return learner.actor_key, learner.deployable_policy()
-
-    def state_dict(self) -> dict[str, Any]:
-        return self._ready().state_dict()
-
-    def load_state_dict(self, state: Mapping[str, Any]) -> None:
-        self._ready().load_state_dict(state)
 
     def fresh_rank(self, generator: torch.Generator) -> None:
         self._ready().fresh_rank(generator)
