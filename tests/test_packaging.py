@@ -8,7 +8,13 @@ import tomllib
 from helpers import REPO
 
 from retarget.registry.loader import load_plugins
-from retarget.testing.toolkit import TOOLKIT, toolkit_violations
+from retarget.testing.toolkit import (
+    PROVISIONAL,
+    TOOLKIT,
+    provisional_imports,
+    tier,
+    toolkit_violations,
+)
 
 
 def _pyproject() -> dict:
@@ -61,3 +67,19 @@ def test_ci_runs_the_readme_test_command() -> None:
     readme = (REPO / "README.md").read_text()
     ci = (REPO / ".ci" / "run").read_text().strip().splitlines()
     assert ci[-1] in readme, f"README must show the test command CI runs: {ci[-1]!r}"
+
+
+def test_toolkit_tiers() -> None:
+    """Every provisional entry is part of the toolkit; the plugin base classes are stable."""
+    assert set(TOOLKIT) >= PROVISIONAL
+    assert tier("retarget") == tier("retarget.kinds.reward") == "stable"
+    assert tier("retarget.learn.ppo") == tier("retarget.env.build") == "provisional"
+    assert tier("retarget.env.managers") is None  # not in the toolkit at all
+
+
+def test_provisional_imports_are_listed(tmp_path) -> None:
+    plugin = tmp_path / "plugin.py"
+    plugin.write_text("import retarget\nfrom retarget.learn.networks import mlp\n"
+                      "from retarget.character.builder import BodyBuilder\n")
+    found = provisional_imports([plugin])
+    assert len(found) == 1 and "retarget.learn" in found[0] and ":2 " in found[0]

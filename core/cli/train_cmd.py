@@ -91,13 +91,23 @@ def _budget(args: argparse.Namespace, done: Any) -> Any:
     )
 
 
-def _figures(last: dict[str, float]) -> str:
-    """What the progress bar shows: a policy's return and episode length, or an
-    algorithm's own loss and error when it steps no episodes (a pose estimator)."""
-    if "mpjpe_mm" in last and "episode_return" not in last:
-        return f"loss {last.get('loss', 0.0):>7.3f}  mpjpe {last['mpjpe_mm']:>5.1f} mm"
-    return (f"return {last.get('episode_return', 0.0):>7.2f}  "
-            f"ep len {last.get('episode_length', 0.0):>5.1f}")  # fmt: skip
+_LABELS = {
+    "episode_return": ("return", "{:>7.2f}"),
+    "episode_length": ("ep len", "{:>5.1f}"),
+    "loss": ("loss", "{:>7.3f}"),
+    "mpjpe_mm": ("mpjpe", "{:>5.1f} mm"),
+}
+
+
+def _figures(last: dict[str, float], headline: tuple[str, ...]) -> str:
+    """What the progress bar shows: the figures the algorithm's iteration names as its
+    headline (a policy's return and episode length, a pose estimator's loss and error)."""
+    parts = []
+    for key in headline:
+        if key in last:
+            label, fmt = _LABELS.get(key, (key, "{:.4g}"))
+            parts.append(f"{label} {fmt.format(last[key])}")
+    return "  ".join(parts)
 
 
 @contextmanager
@@ -218,7 +228,7 @@ def _train(args: argparse.Namespace, registry: Registry, comm: Comm) -> int:
                 task,
                 completed=done if (total or minutes_total) else None,
                 rate=p.last.get("steps_per_s_total", 0.0),
-                figures=_figures(p.last),
+                figures=_figures(p.last, trainer.headline),
             )
 
         last = trainer.train(budget, on_iteration=update)

@@ -11,8 +11,8 @@ import argparse
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from retarget.kinds.lookup import PluginLookup
     from retarget.recipe import ResolvedRecipe
-    from retarget.registry import Registry
 
 
 def add_recipe_flags(parser: argparse.ArgumentParser) -> None:
@@ -58,7 +58,7 @@ def shorthands(args: argparse.Namespace) -> dict[str, str | None]:
     return {key: getattr(args, key, None) for key in keys}
 
 
-def load_from_args(args: argparse.Namespace, registry: Registry) -> ResolvedRecipe:
+def load_from_args(args: argparse.Namespace, registry: PluginLookup) -> ResolvedRecipe:
     """The recipe those flags describe, resolved against ``registry`` (the invocation's)."""
     from retarget.recipe import load
 

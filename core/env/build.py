@@ -16,13 +16,15 @@ from retarget.kinds import (
     StepPlugin,
     Termination,
 )
+from retarget.kinds.lookup import PluginLookup
 from retarget.motion.clip import MotionClip
 from retarget.motion.sources import load_motions
 from retarget.recipe import ResolvedRecipe
-from retarget.registry import Registry
 
 
-def motion_formats(resolved: ResolvedRecipe, registry: Registry | None) -> dict[str, MotionFormat]:
+def motion_formats(
+    resolved: ResolvedRecipe, registry: PluginLookup | None
+) -> dict[str, MotionFormat]:
     """The readers of a recipe's motions: only the ``motions.format`` component, exactly as
     configured, else every registered format with its defaults (each file read by the one
     whose suffix it has); without a registry, the installed plugins'."""
@@ -46,7 +48,7 @@ def env_from_recipe(
     motions: str | None = None,
     clips: list[MotionClip] | None = None,
     terminations: bool = True,
-    registry: Registry | None = None,
+    registry: PluginLookup | None = None,
     seed: int | None = None,
     include: Sequence[str] | None = None,
     exclude: Sequence[str] | None = None,

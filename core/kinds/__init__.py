@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from retarget.kinds.algorithm import Algorithm, VecEnv
-from retarget.kinds.base import Plugin, PluginConfig
+from retarget.kinds.base import ConfigT, Plugin, PluginConfig
 from retarget.kinds.callback import Callback
 from retarget.kinds.character import REQUIRED_GROUPS, REQUIRED_SITES, Character
 from retarget.kinds.command import Command
+from retarget.kinds.iteration import IterationResult
 from retarget.kinds.motion_format import MotionFormat
 from retarget.kinds.reward import RewardConfig, RewardTerm, gaussian_kernel
 from retarget.kinds.scene import Scene
@@ -36,6 +37,8 @@ __all__ = [
     "Callback",
     "Character",
     "Command",
+    "ConfigT",
+    "IterationResult",
     "MotionFormat",
     "ObsSpec",
     "Observer",

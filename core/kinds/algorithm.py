@@ -7,8 +7,9 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 
 from retarget.errors import PluginError
-from retarget.kinds.base import Plugin
+from retarget.kinds.base import ConfigT, Plugin
 from retarget.kinds.comm import SINGLE, Comm
+from retarget.kinds.iteration import IterationResult
 from retarget.kinds.pose_estimator import PoseEstimator
 
 if TYPE_CHECKING:
@@ -37,12 +38,14 @@ class VecEnv(Protocol):
     ) -> tuple[Mapping[str, torch.Tensor], torch.Tensor, torch.Tensor, torch.Tensor, dict]: ...
 
 
-class Algorithm(Plugin):
+class Algorithm(Plugin[ConfigT]):
     """Base class of learning algorithms (PPO, distillation, ...).
 
     ``setup`` builds networks for an environment; ``train_iteration`` collects one rollout and
-    updates, returning scalar statistics; ``act`` is the deterministic policy used by eval and
-    export. ``state_dict`` must hold everything needed to resume exactly.
+    updates, returning an :class:`~retarget.kinds.iteration.IterationResult` (its statistics,
+    the samples it learnt from when it stepped no environment, the progress bar's figures;
+    a plain dict of statistics is still accepted); ``act`` is the deterministic policy used
+    by eval and export. ``state_dict`` must hold everything needed to resume exactly.
     """
 
     kind: ClassVar[str] = "algorithm"
@@ -62,7 +65,7 @@ class Algorithm(Plugin):
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None: ...
 
     @abstractmethod
-    def train_iteration(self, env: VecEnv) -> dict[str, float]: ...
+    def train_iteration(self, env: VecEnv) -> IterationResult | dict[str, float]: ...
 
     @abstractmethod
     def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor: ...

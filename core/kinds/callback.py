@@ -14,10 +14,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, ClassVar
 
-from retarget.kinds.base import Plugin
+from retarget.kinds.base import ConfigT, Plugin
 
 
-class Callback(Plugin):
+class Callback(Plugin[ConfigT]):
     """Base class of training callbacks; every method is optional (the defaults do nothing).
 
     Only the main process of a data-parallel run calls them (rank 0, the one that writes

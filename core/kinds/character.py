@@ -6,7 +6,7 @@ from abc import abstractmethod
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, ClassVar
 
-from retarget.kinds.base import Plugin
+from retarget.kinds.base import ConfigT, Plugin
 
 if TYPE_CHECKING:
     import mujoco
@@ -20,7 +20,7 @@ REQUIRED_GROUPS: tuple[str, ...] = ("feet", "upper_body")
 """Body groups every character provides: foot contact and fall detection rely on them."""
 
 
-class Character(Plugin):
+class Character(Plugin[ConfigT]):
     """Base class of characters.
 
     A character builds its own MJCF (``build_spec``) with a free root joint first, torque

@@ -6,13 +6,13 @@ import argparse
 from abc import abstractmethod
 from typing import TYPE_CHECKING, ClassVar
 
-from retarget.kinds.base import Plugin
+from retarget.kinds.base import ConfigT, Plugin
 
 if TYPE_CHECKING:
     from retarget.kinds.lookup import PluginLookup
 
 
-class Command(Plugin):
+class Command(Plugin[ConfigT]):
     """Base class of subcommands: ``add_arguments`` declares flags, ``run`` returns an exit code.
 
     Raise :class:`retarget.errors.RetargetError` for user errors: the CLI prints it as one line.

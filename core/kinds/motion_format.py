@@ -6,13 +6,13 @@ from abc import abstractmethod
 from pathlib import Path
 from typing import TYPE_CHECKING, ClassVar
 
-from retarget.kinds.base import Plugin
+from retarget.kinds.base import ConfigT, Plugin
 
 if TYPE_CHECKING:
     from retarget.motion.clip import MotionClip
 
 
-class MotionFormat(Plugin):
+class MotionFormat(Plugin[ConfigT]):
     """Base class of motion readers.
 
     ``suffixes`` picks the reader for a file (``.bvh``); ``read`` must raise

@@ -6,6 +6,7 @@ from abc import abstractmethod
 from typing import TYPE_CHECKING, ClassVar
 
 from pydantic import Field
+from typing_extensions import TypeVar
 
 from retarget.kinds.base import PluginConfig
 from retarget.kinds.step import StepPlugin
@@ -28,7 +29,10 @@ class RewardConfig(PluginConfig):
     weight: float = Field(1.0, description="w in w*exp(-k*d); 0 disables the term")
 
 
-class RewardTerm(StepPlugin):
+RewardConfigT = TypeVar("RewardConfigT", bound=RewardConfig, default=RewardConfig)
+
+
+class RewardTerm(StepPlugin[RewardConfigT]):
     """Base class of reward terms.
 
     ``compute`` returns an unweighted float32 ``(N,)`` tensor; the manager multiplies by

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from abc import abstractmethod
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
-from retarget.kinds.base import Plugin
+from retarget.kinds.base import ConfigT, Plugin
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from retarget.motion.clip import MotionClip
 
 
-class Scene(Plugin):
+class Scene(Plugin[ConfigT]):
     """Base class of scenes.
 
     ``build`` adds geometry to a world spec (the floor is the scene's job too).
@@ -89,7 +89,7 @@ class Scene(Plugin):
     def randomize(self, env_ids: torch.Tensor, generator: torch.Generator) -> None:
         """Re-draw per-episode placement noise for ``env_ids`` (static scenes ignore this)."""
 
-    def select(self, env_ids: torch.Tensor) -> Scene:
+    def select(self, env_ids: torch.Tensor) -> Scene[Any]:
         """The scene as seen by environments ``env_ids`` only (static scenes are themselves)."""
         return self
 

@@ -6,6 +6,7 @@ from abc import abstractmethod
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
+from retarget.kinds.base import ConfigT
 from retarget.kinds.step import StepPlugin
 
 if TYPE_CHECKING:
@@ -56,7 +57,7 @@ class RecordedStream:
     source: Path
 
 
-class Sensor(StepPlugin):
+class Sensor(StepPlugin[ConfigT]):
     """Base class of sensors: batched device signals in the character's heading frame.
 
     ``bind`` resolves names to indices once; ``observe`` returns ``(N, *spec.shape)`` for the
@@ -101,7 +102,7 @@ class Sensor(StepPlugin):
         )
 
 
-class Observer(Sensor):
+class Observer(Sensor[ConfigT]):
     """Base class of observers: scene perception (height maps, point clouds), batched."""
 
     kind: ClassVar[str] = "observer"

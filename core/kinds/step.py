@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from retarget.kinds.base import Plugin
+from retarget.kinds.base import ConfigT, Plugin
 
 if TYPE_CHECKING:
     import torch
@@ -40,7 +40,7 @@ class StepNeeds:
         return StepNeeds(offsets, self.scene_contacts or other.scene_contacts)
 
 
-class StepPlugin(Plugin):
+class StepPlugin(Plugin[ConfigT]):
     """Base of the plugins that run every control step, on whole batches of environments."""
 
     registry: PluginLookup | None = None

@@ -5,6 +5,7 @@ from __future__ import annotations
 from abc import abstractmethod
 from typing import TYPE_CHECKING, ClassVar
 
+from retarget.kinds.base import ConfigT
 from retarget.kinds.step import StepPlugin
 
 if TYPE_CHECKING:
@@ -13,7 +14,7 @@ if TYPE_CHECKING:
     from retarget.kinds.state import StepContext
 
 
-class Termination(StepPlugin):
+class Termination(StepPlugin[ConfigT]):
     """Base class of terminations.
 
     ``check`` returns a bool ``(N,)`` tensor; terminations run before rewards each step.

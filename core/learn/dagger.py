@@ -104,7 +104,7 @@ class DaggerLearner:
 
     def deployable_policy(self) -> nn.Module:
         """Normaliser + student mean network + clamp, frozen: needs no teacher at run time."""
-        return DeployedPolicy(self.obs_norm.groups[self.actor_key], self.actor).eval()
+        return DeployedPolicy(self.obs_norm.normalizer(self.actor_key), self.actor).eval()
 
     def beta(self) -> float:
         """Probability that the teacher acts in an environment this iteration."""
@@ -124,7 +124,7 @@ class DaggerLearner:
             raise RuntimeError("DaggerLearner.set_teacher(policy) must be called first")
         if self.last_obs is None:
             self.last_obs = {k: v.float() for k, v in env.reset().items()}
-            norm = self.obs_norm.groups[self.actor_key]
+            norm = self.obs_norm.normalizer(self.actor_key)
             if int(norm.count) == 0:
                 norm.update_ranks(self.comm, self.last_obs[self.actor_key])
         obs = self.last_obs
@@ -144,8 +144,8 @@ class DaggerLearner:
             self.episodes.step(reward.float(), terminated.bool() | truncated.bool())
             obs = {k: v.float() for k, v in next_obs.items()}
         self.last_obs = obs
-        norm = self.obs_norm.groups[self.actor_key]
-        norm.merge_ranks(self.comm, *pending.groups[self.actor_key].raw_stats())
+        norm = self.obs_norm.normalizer(self.actor_key)
+        norm.merge_ranks(self.comm, *pending.normalizer(self.actor_key).raw_stats())
         return {
             "action_gap": gap / c.rollout_steps,  # student vs teacher, on the student's states
             "beta": self.beta(),

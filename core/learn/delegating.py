@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING, Any
 
 from retarget.errors import PluginError
 from retarget.kinds.algorithm import Algorithm
+from retarget.kinds.base import ConfigT
+from retarget.kinds.iteration import IterationResult
 
 if TYPE_CHECKING:
     import torch
@@ -20,7 +22,7 @@ if TYPE_CHECKING:
     from retarget.kinds.algorithm import VecEnv
 
 
-class LearnerAlgorithm(Algorithm):
+class LearnerAlgorithm(Algorithm[ConfigT]):
     """Forwards training, acting, the deployable policy and checkpoints to ``self.learner``
     (set by the subclass's ``setup``), whose ``actor_key`` names the observation group the
     policy reads and whose ``deployable_policy()`` is the exported module."""
@@ -32,8 +34,8 @@ class LearnerAlgorithm(Algorithm):
             raise PluginError("setup(env) must be called first", plugin=self.name)
         return self.learner
 
-    def train_iteration(self, env: VecEnv) -> dict[str, float]:
-        return self._ready().train_iteration(env)
+    def train_iteration(self, env: VecEnv) -> IterationResult:
+        return IterationResult(stats=self._ready().train_iteration(env))
 
     def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
         return self._ready().act(obs)

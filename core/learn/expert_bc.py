@@ -148,7 +148,7 @@ class ExpertBCLearner(DaggerLearner):
                 obs = self.last_obs[key]
             assert self.window is not None
             label = torch.from_numpy(self.window[envs, self.at])
-            if int(self.obs_norm.groups[key].count) == 0:  # the first batch sets the scale
+            if int(self.obs_norm.normalizer(key).count) == 0:  # the first batch sets the scale
                 self.obs_norm.update({key: obs})
             else:
                 pending_rows.append(obs)

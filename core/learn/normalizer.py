@@ -10,7 +10,7 @@ observation of one rollout is scaled the same way.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import torch
 from torch import nn
@@ -21,6 +21,10 @@ if TYPE_CHECKING:
 
 class RunningNormalizer(nn.Module):
     """``(x - mean) / sqrt(var + eps)``, clipped to ``[-clip, clip]``."""
+
+    mean: torch.Tensor
+    var: torch.Tensor
+    count: torch.Tensor
 
     def __init__(
         self, dim: int, *, clip: float = 10.0, eps: float = 1e-8, max_count: float | None = None
@@ -85,6 +89,10 @@ class GroupNormalizer(nn.Module):
     def __init__(self, dims: Mapping[str, int], *, clip: float = 10.0) -> None:
         super().__init__()
         self.groups = nn.ModuleDict({k: RunningNormalizer(d, clip=clip) for k, d in dims.items()})
+
+    def normalizer(self, key: str) -> RunningNormalizer:
+        """The running statistics of one observation group."""
+        return cast(RunningNormalizer, self.groups[key])
 
     def update(self, obs: Mapping[str, torch.Tensor]) -> None:
         for key, norm in self.groups.items():

@@ -157,7 +157,7 @@ class PPOLearner:
 
     def deployable_policy(self) -> nn.Module:
         """A frozen copy of :meth:`act` as one module (normaliser + mean network + clamp)."""
-        norm = self.obs_norm.groups[self.actor_key] if self.config.normalize_obs else None
+        norm = self.obs_norm.normalizer(self.actor_key) if self.config.normalize_obs else None
         return DeployedPolicy(norm, self.actor, self.residual).eval()
 
     # ------------------------------------------------------------------ collection
@@ -256,7 +256,7 @@ class PPOLearner:
         self._pending = None
         if self.config.normalize_obs:
             for key, norm in self.obs_norm.groups.items():
-                norm.merge_ranks(self.comm, *pending.groups[key].raw_stats())
+                norm.merge_ranks(self.comm, *pending.normalizer(key).raw_stats())
         if self.config.normalize_values:
             self._update_value_stats(st.returns)
 

@@ -14,10 +14,11 @@ from pydantic import ValidationError
 
 from retarget.errors import PluginError, RecipeError, RetargetError
 from retarget.kinds import Character, Plugin, PluginConfig
+from retarget.kinds.lookup import PluginLookup
 from retarget.recipe.errors import from_validation
 from retarget.recipe.model import SLOTS, ComponentRef, Recipe
 from retarget.recipe.source import RecipeSource
-from retarget.registry import Entry, Registry
+from retarget.registry import Entry
 
 
 @dataclass(frozen=True)
@@ -105,7 +106,7 @@ def _refs(recipe: Recipe) -> list[tuple[str, str, ComponentRef]]:
     return out
 
 
-def resolve(source: RecipeSource, registry: Registry) -> ResolvedRecipe:
+def resolve(source: RecipeSource, registry: PluginLookup) -> ResolvedRecipe:
     """Validate ``source`` against the installed plugins; raises one RecipeError on failure."""
     recipe = validate_structure(source)
     components: dict[str, Component] = {}
@@ -166,7 +167,7 @@ def cross_check(resolved: ResolvedRecipe) -> None:
 
 def load(
     path: str | Path | None,
-    registry: Registry,
+    registry: PluginLookup,
     *,
     shorthands: dict[str, str | None] | None = None,
     assignments: list[str] | tuple[str, ...] = (),

@@ -9,8 +9,8 @@ from __future__ import annotations
 import copy
 from typing import Any
 
+from retarget.kinds.lookup import PluginLookup
 from retarget.recipe.model import SLOTS, Recipe
-from retarget.registry import Registry
 
 
 def _plugin_branch(kind: str, name: str, config_schema: dict[str, Any]) -> dict[str, Any]:
@@ -29,7 +29,7 @@ def _plugin_branch(kind: str, name: str, config_schema: dict[str, Any]) -> dict[
     return branch
 
 
-def recipe_schema(registry: Registry) -> dict[str, Any]:
+def recipe_schema(registry: PluginLookup) -> dict[str, Any]:
     schema = Recipe.model_json_schema()
     schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
     defs = schema.setdefault("$defs", {})

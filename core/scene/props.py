@@ -26,10 +26,13 @@ are immovable.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
+from functools import partial
 from typing import TYPE_CHECKING, ClassVar, Literal
 
 from pydantic import Field
+from typing_extensions import TypeVar
 
 from retarget.errors import PluginError
 from retarget.kinds import PluginConfig, Scene
@@ -170,7 +173,12 @@ class _Tables:
             self.reach[prop] = max(float(self.reach[prop]), far)
 
 
-class PropScene(Scene):
+PropConfigT = TypeVar("PropConfigT", bound=PropSetConfig, default=PropSceneConfig)
+"""A prop scene's config: a :class:`PropSetConfig`, placed as a whole when a
+:class:`PropSceneConfig`."""
+
+
+class PropScene(Scene[PropConfigT]):
     """Base of scenes made of :class:`Prop` s; subclasses say which props in :meth:`props`."""
 
     Config: ClassVar[type[PluginConfig]] = PropSceneConfig
@@ -183,7 +191,6 @@ class PropScene(Scene):
                 f"{type(self).__name__}.Config must derive from PropSetConfig (density, "
                 "randomize) or PropSceneConfig (and position, yaw)", plugin=f"scene {self.name}",
             )
-        self.props_config: PropSetConfig = self.config
         self._props = self.placed_props()
         names = [p.name for p in self._props]
         if len(set(names)) != len(names):
@@ -200,14 +207,15 @@ class PropScene(Scene):
 
     def placed_props(self) -> list[Prop]:
         cfg = self.config
-        placed = isinstance(cfg, PropSceneConfig)
-        xy = tuple(cfg.position) if placed else (0.0, 0.0)
-        yaw = float(cfg.yaw) if placed else 0.0
-        return [p.moved(xy, yaw) for p in self.props()]  # type: ignore[arg-type]
+        xy: tuple[float, float] = (0.0, 0.0)
+        yaw = 0.0
+        if isinstance(cfg, PropSceneConfig):
+            xy, yaw = (float(cfg.position[0]), float(cfg.position[1])), float(cfg.yaw)
+        return [p.moved(xy, yaw) for p in self.props()]
 
     @property
     def randomization(self) -> Randomization:
-        return self.props_config.randomize
+        return self.config.randomize
 
     # ---------------------------------------------------------------- building
 
@@ -220,7 +228,7 @@ class PropScene(Scene):
 
         from retarget.geometry.heading import yaw_quat
         add_floor(spec)
-        density = float(self.props_config.density)
+        density = float(self.config.density)
         for prop in self._props:
             body = spec.worldbody.add_body(
                 name=self.body_name(prop),
@@ -296,7 +304,7 @@ class PropScene(Scene):
             dim=-1,
         )
 
-    def select(self, env_ids: torch.Tensor) -> PropScene:
+    def select(self, env_ids: torch.Tensor) -> PropScene[PropConfigT]:
         if not self._allocated:
             return self
         view = object.__new__(type(self))
@@ -327,7 +335,7 @@ class PropScene(Scene):
     def state_dict(self) -> dict[str, torch.Tensor]:
         return {"offsets": self._offsets.clone()}
 
-    def load_state_dict(self, state: dict[str, torch.Tensor]) -> None:
+    def load_state_dict(self, state: Mapping[str, torch.Tensor]) -> None:
         self._offsets = state["offsets"].clone()
         self._allocated = True
 
@@ -368,7 +376,7 @@ class PropScene(Scene):
     def local_surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
         """``(count, 4)``: prop index and x, y, z in that prop's frame (area-weighted)."""
         import numpy as np
-        faces = []  # (prop, area, sampler)
+        faces: list[tuple[int, float, Sampler]] = []  # (prop, area, sampler)
         for i, part in self._tables.parts:
             faces.extend((i, area, fn) for area, fn in _faces(part))
         if not faces or count == 0:
@@ -411,12 +419,16 @@ def place_points(local: torch.Tensor, pose: torch.Tensor) -> torch.Tensor:
     return torch.stack([p[..., 0] + c * x - s * y, p[..., 1] + s * x + c * y, p[..., 2] + z], -1)
 
 
-def _faces(part: Part):
+Sampler = Callable[["np.random.Generator", int], "np.ndarray"]
+"""Draws ``k`` points ``(k, 3)`` on one face of a part."""
+
+
+def _faces(part: Part) -> list[tuple[float, Sampler]]:
     """(area, sampler) of each exposed face of a part; samplers draw ``(k, 3)`` points."""
     import numpy as np
     hx, _, hz = part.half
     cx, cy, cz = part.pos
-    out = []
+    out: list[tuple[float, Sampler]] = []
     if part.shape == "box":
         for axis, (a, b) in ((0, (1, 2)), (1, (0, 2)), (2, (0, 1))):
             for sign in (-1.0, 1.0):
@@ -436,16 +448,16 @@ def _faces(part: Part):
     else:
         r = hx
 
-        def disc(rng, k, z):
+        def disc(rng: np.random.Generator, k: int, z: float) -> np.ndarray:
             rad = r * np.sqrt(rng.uniform(0, 1, k))
             ang = rng.uniform(0, 2 * np.pi, k)
             return np.stack([cx + rad * np.cos(ang), cy + rad * np.sin(ang), np.full(k, z)], 1)
 
-        out.append((np.pi * r * r, lambda rng, k: disc(rng, k, cz + hz)))
+        out.append((np.pi * r * r, partial(disc, z=cz + hz)))
         if cz - hz > _FLOOR_EPS:
-            out.append((np.pi * r * r, lambda rng, k: disc(rng, k, cz - hz)))
+            out.append((np.pi * r * r, partial(disc, z=cz - hz)))
 
-        def side(rng, k):
+        def side(rng: np.random.Generator, k: int) -> np.ndarray:
             ang = rng.uniform(0, 2 * np.pi, k)
             z = rng.uniform(cz - hz, cz + hz, k)
             return np.stack([cx + r * np.cos(ang), cy + r * np.sin(ang), z], 1)

@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import inspect
 import io
-import math
 import sys
 import tempfile
 from collections.abc import Callable
@@ -26,6 +25,7 @@ from pydantic import ValidationError
 from retarget.errors import MotionError
 from retarget.kinds import KINDS, Plugin, PluginConfig
 from retarget.kinds.base import NAME_RE
+from retarget.kinds.iteration import IterationResult, as_result
 from retarget.kinds.step import StepNeeds
 from retarget.motion.clip import MotionClip
 from retarget.motion.skeleton import NUM_JOINTS
@@ -472,14 +472,27 @@ def _estimates(env, algo) -> torch.Tensor:
     return torch.from_numpy(np.concatenate([*parts], 0))
 
 
+def _iteration(value: object) -> IterationResult:
+    """An iteration's return, checked: statistics present and finite."""
+    try:
+        result = as_result(value)  # type: ignore[arg-type]
+    except TypeError as exc:
+        raise AssertionError(str(exc)) from None
+    assert result.stats, "train_iteration must return statistics"
+    assert not result.non_finite(), f"non-finite training statistics: {result.non_finite()}"
+    return result
+
+
 def check_algorithm_update(plugin: object) -> None:
     if plugin_class(plugin).kinematic:
         env = kinematic_env()
         algo = make(plugin)
         algo.setup(env, torch.Generator().manual_seed(0))
-        stats = algo.train_iteration(env)
-        bad = {k: v for k, v in stats.items() if not math.isfinite(float(v))}
-        assert stats and not bad, f"train_iteration statistics missing or non-finite: {stats}"
+        result = _iteration(algo.train_iteration(env))
+        assert result.samples, (
+            "a kinematic algorithm steps no environment: its IterationResult must say how "
+            "many samples it learnt from (samples=...), or the run's budget never advances"
+        )
         assert algo.pose_estimator() is not None, "a kinematic algorithm gives pose_estimator()"
         est = _estimates(env, algo)
         assert torch.isfinite(est).all(), "the pose estimate is not finite"
@@ -487,10 +500,7 @@ def check_algorithm_update(plugin: object) -> None:
     env = FakeVecEnv(num_envs=4)
     algo = make(plugin)
     algo.setup(env, torch.Generator().manual_seed(0))
-    stats = algo.train_iteration(env)
-    assert isinstance(stats, dict) and stats, "train_iteration must return statistics"
-    bad = {k: v for k, v in stats.items() if not math.isfinite(float(v))}
-    assert not bad, f"non-finite training statistics: {bad}"
+    _iteration(algo.train_iteration(env))
     obs = env.reset()
     action = algo.act(obs)
     assert tuple(action.shape) == (4, env.action_dim), f"act shape {tuple(action.shape)}"

@@ -59,6 +59,37 @@ TOOLKIT: dict[str, str] = {
 }
 """Module -> what a plugin uses it for."""
 
+PROVISIONAL: frozenset[str] = frozenset({
+    "retarget.expert.*",
+    "retarget.learn.*",
+    "retarget.env",
+    "retarget.env.build",
+    "retarget.settings.*",
+    "retarget.train.load",
+    "retarget.train.run_dir",
+    "retarget.motion.scene_fit",
+    "retarget.motion.library",
+    "retarget.motion.device_frames",
+    "retarget.render.*",
+})
+"""Toolkit entries whose names may still change between minor releases (learning building
+blocks, the environment, run files, pictures): a plugin may import them, and
+:func:`provisional_imports` lists where it does. Every other entry is *stable*: the plugin
+base classes, step data, errors, the character builder and joint maps, rotations, prop
+scenes, motion clips and readers, recipes and the contract suite change only with a
+deprecation first."""
+
+
+def tier(module: str) -> str | None:
+    """``"stable"`` or ``"provisional"`` for a toolkit module, ``None`` outside it."""
+    if not allowed(module):
+        return None
+    for entry in PROVISIONAL:
+        package = entry.removesuffix(".*")
+        if module == package or (entry.endswith(".*") and module.startswith(package + ".")):
+            return "provisional"
+    return "stable"
+
 
 def allowed(module: str) -> bool:
     """Whether ``module`` (dotted) is part of the declared toolkit."""
@@ -109,6 +140,17 @@ def toolkit_violations(files: Iterable[Path], own: str) -> list[str]:
                 continue
             if top == "retarget" and not allowed(module):
                 found.append(f"{path}:{line} imports {module}")
+    return found
+
+
+def provisional_imports(files: Iterable[Path]) -> list[str]:
+    """``path:line module`` for each import of a provisional toolkit module in ``files``:
+    what a plugin package should re-check when it moves to a new retarget release."""
+    found = []
+    for path in files:
+        tree = ast.parse(Path(path).read_text(encoding="utf-8"), filename=str(path))
+        found.extend(f"{path}:{line} imports {module}" for line, module in _imports(tree)
+                     if tier(module) == "provisional")  # fmt: skip
     return found
 
 

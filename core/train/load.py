@@ -13,16 +13,16 @@ from retarget.env import RetargetEnv
 from retarget.env.build import env_from_recipe
 from retarget.errors import RecipeError
 from retarget.kinds import Algorithm
+from retarget.kinds.lookup import PluginLookup
 from retarget.motion.clip import MotionClip
 from retarget.recipe import ResolvedRecipe, apply_overrides, parse_text, resolve
 from retarget.recipe.source import LOCK_SECTION
-from retarget.registry import Registry
 from retarget.train.checkpoint import load_checkpoint
 from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
 
 
 def locked_recipe(
-    run: Path, registry: Registry, *, scene: str | None = None, assignments: Sequence[str] = ()
+    run: Path, registry: PluginLookup, *, scene: str | None = None, assignments: Sequence[str] = ()
 ) -> tuple[ResolvedRecipe, dict]:
     """The run's ``recipe.lock.yaml`` resolved against the installed plugins, and its lock
     section (plugin versions the run started with).
@@ -45,7 +45,7 @@ def locked_recipe(
     return resolve(source, registry), lock
 
 
-def prepared_recipe(resolved: ResolvedRecipe, registry: Registry) -> ResolvedRecipe:
+def prepared_recipe(resolved: ResolvedRecipe, registry: PluginLookup) -> ResolvedRecipe:
     """``resolved`` after its algorithm's :meth:`~retarget.kinds.Algorithm.prepare_recipe`
     (e.g. a distillation run given its teacher's sensors), resolved again; unchanged when
     the algorithm changes nothing."""
@@ -76,7 +76,7 @@ class LoadedRun:
 
 def load_run(
     path: str | Path,
-    registry: Registry,
+    registry: PluginLookup,
     *,
     num_envs: int = 1,
     motions: str | None = None,

@@ -13,7 +13,6 @@ play and export read a distributed run like any other; the others under ``ranks`
 
 from __future__ import annotations
 
-import math
 import os
 import random
 import signal
@@ -32,6 +31,7 @@ import torch
 from retarget.env.build import env_from_recipe
 from retarget.errors import RecipeError, SimulationError
 from retarget.kinds import Algorithm, Callback
+from retarget.kinds.iteration import RL_HEADLINE, IterationResult, as_result
 from retarget.recipe import ResolvedRecipe, write_lock
 from retarget.registry import Registry
 from retarget.train.checkpoint import load_checkpoint, save_checkpoint
@@ -136,6 +136,8 @@ class Trainer:
             self.algorithm.connect(registry)
         self.algorithm.setup(self.env, generator)
         self.progress = Progress()
+        self.headline: tuple[str, ...] = RL_HEADLINE
+        """The progress bar's figures, as the last iteration named them."""
         self.logger = MetricsLogger(run, tensorboard=tensorboard) if comm.main else None
         if comm.main:
             write_lock(resolved, run)
@@ -239,10 +241,10 @@ class Trainer:
         print("\nstopping after this iteration (a checkpoint is written; Ctrl-C again aborts)",
               file=sys.stderr, flush=True)  # fmt: skip
 
-    def _check_finite(self, stats: dict[str, float]) -> None:
+    def _check_finite(self, result: IterationResult) -> None:
         """Stop at the first non-finite statistic (a loss, a return): running on would only
         overwrite good checkpoints with NaN weights. Every rank stops when one sees it."""
-        bad = [(k, v) for k, v in stats.items() if not math.isfinite(float(v))]
+        bad = list(result.non_finite().items())
         if self.comm.any(bool(bad)):
             what = f"{bad[0][0]} = {bad[0][1]}" if bad else "on another rank"
             raise SimulationError(
@@ -271,8 +273,10 @@ class Trainer:
                 assist = self.env.root_assist
                 if assist is not None:  # training alone gets the annealed root assist
                     assist.scale = assist.options.scale_at(self.progress.env_steps)
-                stats = self.algorithm.train_iteration(self.env)
-                self._check_finite(stats)
+                result = as_result(self.algorithm.train_iteration(self.env))
+                self._check_finite(result)
+                self.headline = result.headline
+                stats = dict(result.stats)
                 if assist is not None:
                     stats["root_assist"] = assist.scale
                 if self.env.curriculum is not None:
@@ -283,7 +287,7 @@ class Trainer:
                 stepped = self.env.total_steps - before
                 # an algorithm that learns from the library without stepping (a pose
                 # estimator) reports the samples it used instead
-                local = stepped if stepped else int(stats.pop("samples", 0))
+                local = stepped if stepped else int(result.samples or 0)
                 p.env_steps += int(self.comm.total(local))
                 p.elapsed = time.perf_counter() - start
                 p.last = {k: float(v) for k, v in stats.items()}

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import retarget
-from retarget import PluginError, RecipeError, VecEnv
+from retarget import IterationResult, PluginError, RecipeError, VecEnv
 from retarget.learn.config import DaggerConfig
 from retarget.learn.delegating import LearnerAlgorithm
 from retarget.settings.sim import ACTION_PHYSICS
@@ -46,7 +46,7 @@ def _actor_sources(recipe: Mapping[str, Any], group: str = "actor") -> list[str]
     return [*_names(recipe.get("sensors", [])), "proprio", *_names(recipe.get("observers", []))]
 
 
-class Dagger(LearnerAlgorithm):
+class Dagger(LearnerAlgorithm[DaggerConfig]):
     """Online distillation (DAgger): the student acts, a frozen teacher run labels its states.
 
     The student reads the ``actor`` group (e.g. headset + controllers), the teacher its own
@@ -55,7 +55,6 @@ class Dagger(LearnerAlgorithm):
     """
 
     name = "dagger"
-    Config = DaggerConfig
     distributed = True
 
     def __init__(
@@ -173,7 +172,6 @@ class Dagger(LearnerAlgorithm):
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
         from retarget.learn.columns import image_inputs
         from retarget.learn.dagger import DaggerLearner
-        assert isinstance(self.config, DaggerConfig)
         try:
             images = image_inputs(env, self.config.actor_group)
             self.learner = DaggerLearner(
@@ -214,11 +212,11 @@ class Dagger(LearnerAlgorithm):
             )
         self._ready().set_teacher(policy)
 
-    def train_iteration(self, env: VecEnv) -> dict[str, float]:
+    def train_iteration(self, env: VecEnv) -> IterationResult:
         learner = self._ready()
         if learner.teacher is None:
             self._load_teacher()
-        return learner.train_iteration(env)
+        return IterationResult(stats=learner.train_iteration(env))
 
     def fresh_rank(self, generator: torch.Generator) -> None:
         self._ready().fresh_rank(generator)

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 from pydantic import Field
 
 import retarget
-from retarget import Algorithm, PluginConfig, PluginError, VecEnv
+from retarget import Algorithm, IterationResult, PluginConfig, PluginError, VecEnv
 
 if TYPE_CHECKING:
     import torch
@@ -58,7 +58,7 @@ class EstimatorConfig(PluginConfig):
     )  # fmt: skip
 
 
-class Estimator(Algorithm):
+class Estimator(Algorithm[EstimatorConfig]):
     """Supervised pose estimation from device windows, Gaussian NLL with per-joint variance.
 
     A kinematic method: it outputs the human body, not actions, so ``act`` refuses and
@@ -66,7 +66,6 @@ class Estimator(Algorithm):
     """
 
     name = "estimator"
-    Config = EstimatorConfig
     kinematic = True
 
     @classmethod
@@ -81,7 +80,6 @@ class Estimator(Algorithm):
 
     def prepare_recipe(self, recipe: dict[str, Any], registry: Any) -> dict[str, Any]:
         cfg = self.config
-        assert isinstance(cfg, EstimatorConfig)
         recipe = dict(recipe)
         sensors = []
         for comp in recipe.get("sensors") or []:
@@ -118,7 +116,6 @@ class Estimator(Algorithm):
                     plugin=self.name, hint="use --sensors hmd or three_point",
                 )  # fmt: skip
         cfg = self.config
-        assert isinstance(cfg, EstimatorConfig)
         # with observers the scene is read as it is: a mirrored or resized person would no
         # longer match it, so those augmentations are off
         scene_aware = bool(list(getattr(env, "observers", ())))
@@ -133,8 +130,10 @@ class Estimator(Algorithm):
         )  # fmt: skip
         self.learner = EstimatorLearner(env, settings, generator or torch.Generator())
 
-    def train_iteration(self, env: VecEnv) -> dict[str, float]:
-        return self._ready().train_iteration()
+    def train_iteration(self, env: VecEnv) -> IterationResult:
+        stats = dict(self._ready().train_iteration())
+        samples = int(stats.pop("samples"))  # rows of the library, no environment steps
+        return IterationResult(stats=stats, samples=samples, headline=("loss", "mpjpe_mm"))
 
     def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
         raise PluginError(

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import retarget
-from retarget import PluginError, RecipeError, VecEnv
+from retarget import IterationResult, PluginError, RecipeError, VecEnv
 from retarget.learn.config import ExpertBCConfig
 from retarget.learn.delegating import LearnerAlgorithm
 from retarget.settings.sim import ACTION_PHYSICS
@@ -30,11 +30,10 @@ PHYSICS = ACTION_PHYSICS
 """Simulation settings the expert's actions depend on: the student takes the expert's."""
 
 
-class ExpertBC(LearnerAlgorithm):
+class ExpertBC(LearnerAlgorithm[ExpertBCConfig]):
     """A student learns a tracking expert's actions on the expert's replayed states."""
 
     name = "expert_bc"
-    Config = ExpertBCConfig
 
     def __init__(self, config: ExpertBCConfig | None = None, windows: Any = None) -> None:
         """``windows``: replay these ``ExpertWindows`` instead of the configured directory
@@ -52,7 +51,7 @@ class ExpertBC(LearnerAlgorithm):
         from retarget.learn.expert_bc import ExpertWindows
 
         def windows(action_dim: int) -> ExpertWindows:
-            clip = {"qpos": np.zeros((10, 1)), "qvel": np.zeros((10, 1)),
+            clip: dict[str, np.ndarray] = {"qpos": np.zeros((10, 1)), "qvel": np.zeros((10, 1)),
                     "actions": np.zeros((9, action_dim), np.float32),
                     "demo_frame": np.zeros(0, int)}  # fmt: skip
             return ExpertWindows([clip], ())
@@ -140,11 +139,11 @@ class ExpertBC(LearnerAlgorithm):
             clips.append(data)
         return ExpertWindows(clips, sim.STATE_FIELDS)
 
-    def train_iteration(self, env: VecEnv) -> dict[str, float]:
+    def train_iteration(self, env: VecEnv) -> IterationResult:
         learner = self._ready()
         if learner.windows is None:
             learner.windows = self._load_windows(env)
-        return learner.train_iteration(env)
+        return IterationResult(stats=learner.train_iteration(env))
 
 
 

@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from retarget.learn.ppo import PPOLearner
 
 
-class PPO(LearnerAlgorithm):
+class PPO(LearnerAlgorithm[PPOConfig]):
     """Proximal policy optimisation with an asymmetric critic and fixed exploration noise.
 
     The actor reads the ``actor`` observation group, the critic the privileged ``critic``
@@ -26,7 +26,6 @@ class PPO(LearnerAlgorithm):
     """
 
     name = "ppo"
-    Config = PPOConfig
     distributed = True
 
     def __init__(self, config: PPOConfig | None = None) -> None:
@@ -36,7 +35,6 @@ class PPO(LearnerAlgorithm):
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
         from retarget.learn.columns import image_inputs, source_columns
         from retarget.learn.ppo import PPOLearner
-        assert isinstance(self.config, PPOConfig)
         residual = None
         if self.config.residual is not None:
             residual = source_columns(env, self.config.actor_group, self.config.residual)

@@ -26,11 +26,10 @@ class EventsConfig(retarget.PluginConfig):
     every: int = Field(1, ge=1, le=1_000_000, description="write every k-th iteration")
 
 
-class Events(retarget.Callback):
+class Events(retarget.Callback[EventsConfig]):
     """Append the run's start, iterations, checkpoints and end to RUN/events.jsonl."""
 
     name = "events"
-    Config = EventsConfig
 
     def __init__(self, config: EventsConfig | None = None) -> None:
         super().__init__(config)
@@ -44,12 +43,10 @@ class Events(retarget.Callback):
             handle.write(json.dumps(row, allow_nan=False) + "\n")
 
     def on_train_start(self, run: Path, recipe: Mapping[str, Any], resumed: bool) -> None:
-        assert isinstance(self.config, EventsConfig)
         self.file = Path(run) / self.config.name
         self._write("start", run=str(run), resumed=resumed, recipe=dict(recipe))
 
     def on_iteration(self, iteration: int, env_steps: int, stats: Mapping[str, float]) -> None:
-        assert isinstance(self.config, EventsConfig)
         if iteration % self.config.every:
             return
         clean = {k: (float(v) if math.isfinite(float(v)) else None) for k, v in stats.items()}

@@ -125,16 +125,16 @@ def _extent(model: Any) -> tuple[float, float]:
 
 
 def retarget_video(character: Any, clip: Any, out: Path, width: int, height: int, *,
-                   seconds: float, start: float, fps: float) -> dict[str, float]:
+                   seconds: float, start: float, fps: float) -> dict[str, Any]:
     """Human (the ``human`` character at the subject's height) beside the retargeted character."""
     import mujoco
     import numpy as np
 
     from retarget.character import kinematic as km
-    from retarget.plugins.characters.human import Human
+    from retarget.plugins.characters.human import Human, HumanConfig
     from retarget.render import character_view as cv
 
-    human = Human(Human.Config(height=float(np.clip(clip.height, 0.6, 2.4))))
+    human = Human(HumanConfig(height=float(np.clip(clip.height, 0.6, 2.4))))
     h_model = human.build_spec().compile()
     c_model = character.build_spec().compile()
     h_motion = km.retarget_clip(clip, h_model, human.joint_map(), root_scale=1.0 *

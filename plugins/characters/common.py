@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from pydantic import Field
+from typing_extensions import TypeVar
 
 from retarget import Character, PluginConfig, RecipeError
 from retarget.character.joint_map import JointMap
@@ -25,8 +26,10 @@ class CharacterConfig(PluginConfig):
     """Fields every built-in character has; defaults are the paper's Table 1 per character."""
 
     height: float = Field(1.75, gt=0.1, le=10.0, description="standing height, floor to crown, m")
-    mass: float = Field(70.0, gt=0.1, le=2000.0,
-                        description="total mass, kg (uniform density is solved for)")
+    mass: float | None = Field(
+        70.0, gt=0.1, le=2000.0,
+        description="total mass, kg (uniform density is solved for); None: the character's "
+        "own default")
     max_torque: float = Field(300.0, gt=0.0, description="torque limit before per-joint scales")
     joint_map: dict[str, dict[str, Any] | None] = Field(
         default_factory=dict,
@@ -34,7 +37,10 @@ class CharacterConfig(PluginConfig):
                     "{human, axes, scale, offset} (merged) or null (unmapped)")
 
 
-class ProceduralCharacter(Character):
+CharacterConfigT = TypeVar("CharacterConfigT", bound=CharacterConfig, default=CharacterConfig)
+
+
+class ProceduralCharacter(Character[CharacterConfigT]):
     """A character described by a :class:`BodyBuilder`; builds once, hands out copies.
 
     Subclasses implement ``describe`` (the bodies), ``default_joint_map`` and ``body_groups``,
@@ -58,8 +64,12 @@ class ProceduralCharacter(Character):
 
     @property
     def target_mass(self) -> float:
-        """Total mass the uniform density is solved for (the config's ``mass``)."""
-        return float(self.config.mass)
+        """Total mass the uniform density is solved for: the config's ``mass``, else the
+        default of the base config (characters that scale it with height override this)."""
+        mass = self.config.mass
+        if mass is None:
+            mass = CharacterConfig.model_fields["mass"].default
+        return float(mass)
 
     def built(self) -> BuiltCharacter:
         """The built spec and its facts (density, mass, height, joints), built once."""

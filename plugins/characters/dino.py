@@ -59,7 +59,7 @@ class DinoConfig(CharacterConfig):
     tail_damping_ratio: float = Field(0.15, gt=0.0, description="passive tail damping ratio")
 
 
-class Dino(ProceduralCharacter):
+class Dino(ProceduralCharacter[DinoConfig]):
     """Dino: a tall dinosaur with a long heavy tail, a heavy head and short arms.
 
     Table 1: 180 kg, 250 cm, 30 links (pelvis, 4 spine, neck, head, jaw, 2x upper arm,
@@ -75,7 +75,6 @@ class Dino(ProceduralCharacter):
     """
 
     name = "dino"
-    Config = DinoConfig
     lower_body_joints = ("l_hip", "r_hip", "l_knee", "r_knee", "l_ankle", "r_ankle", "l_toe",
                          "r_toe")
     lower_body_weight = 0.3

@@ -31,7 +31,7 @@ class HumanConfig(CharacterConfig):
     max_torque: float = Field(300.0, gt=0.0, description="torque limit before per-joint scales")
 
 
-class Human(ProceduralCharacter):
+class Human(ProceduralCharacter[HumanConfig]):
     """A human avatar on the canonical skeleton's proportions (18 links, 35 DoF).
 
     QuestEnvSim's avatar has 18 links and 32 DoF without a published split; ours has 3-DoF
@@ -45,7 +45,6 @@ class Human(ProceduralCharacter):
     """
 
     name = "human"
-    Config = HumanConfig
     lower_body_joints = LOWER_BODY_JOINTS
 
     @property

@@ -37,7 +37,7 @@ class JesseConfig(CharacterConfig):
     max_torque: float = Field(300.0, gt=0.0, description="torque limit before Table 4 scales")
 
 
-class Jesse(ProceduralCharacter):
+class Jesse(ProceduralCharacter[JesseConfig]):
     """Jesse, a cartoon human with a skeleton close to the mocap's (paper Table 1).
 
     16 links (pelvis, abdomen, chest, head, upper arms, forearms, hands, thighs, shins, feet)
@@ -46,7 +46,6 @@ class Jesse(ProceduralCharacter):
     """
 
     name = "jesse"
-    Config = JesseConfig
     lower_body_joints = LOWER_BODY_JOINTS
     lower_body_weight = 1.0
 

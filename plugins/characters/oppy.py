@@ -36,7 +36,7 @@ class OppyConfig(CharacterConfig):
     tail_damping_ratio: float = Field(0.15, gt=0.0, description="tail's damping ratio")
 
 
-class Oppy(ProceduralCharacter):
+class Oppy(ProceduralCharacter[OppyConfig]):
     """Oppy: a mouse-like creature with a short lower body, a big head, big ears and a tail.
 
     Table 1: 7 kg, 80 cm, 24 links (pelvis, torso, head, 2x upper arm, forearm = 7 upper; 2x
@@ -47,7 +47,6 @@ class Oppy(ProceduralCharacter):
     """
 
     name = "oppy"
-    Config = OppyConfig
     lower_body_joints = ("l_hip", "r_hip", "l_knee", "r_knee", "l_ankle", "r_ankle")
     lower_body_weight = 0.3
 

@@ -183,6 +183,7 @@ class MotionCommand(Command):
         return 0
 
     def _inspect(self, args: argparse.Namespace) -> int:
+        import numpy as np
         from rich.console import Console
         from rich.table import Table
 
@@ -208,7 +209,7 @@ class MotionCommand(Command):
         for f in files:
             clip = _read(str(f), self.formats)
             seconds += clip.duration
-            c = clip.contacts
+            c = clip.contacts if clip.contacts is not None else np.zeros((1, 2))
             table.add_row(
                 Path(f).name,
                 str(clip.num_frames),

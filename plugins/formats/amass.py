@@ -24,11 +24,10 @@ class AmassConfig(PluginConfig):
     fps: float | None = Field(None, gt=0, le=1000, description="override the file's rate")
 
 
-class Amass(MotionFormat):
+class Amass(MotionFormat[AmassConfig]):
     """AMASS archives: SMPL-family body-model parameters per frame."""
 
     name = "amass"
-    Config = AmassConfig
     suffixes = (".npz",)
 
     def accepts(self, path: Path) -> bool:

@@ -32,11 +32,10 @@ class BvhConfig(PluginConfig):
         "most upright standing frame; 0 for files whose first frame is a T-pose calibration")
 
 
-class Bvh(MotionFormat):
+class Bvh(MotionFormat[BvhConfig]):
     """Biovision hierarchy (.bvh) motion capture, mapped onto the canonical skeleton."""
 
     name = "bvh"
-    Config = BvhConfig
     suffixes = (".bvh",)
     cacheable = True
 

@@ -29,11 +29,10 @@ class PositionsConfig(PluginConfig):
     up: Literal["+x", "-x", "+y", "-y", "+z", "-z"] = Field("+z", description="up axis")
 
 
-class Positions(MotionFormat):
+class Positions(MotionFormat[PositionsConfig]):
     """Global joint positions only (markerless capture, video pose, mocap exports)."""
 
     name = "positions"
-    Config = PositionsConfig
     suffixes = (".npy", ".npz")
 
     def accepts(self, path: Path) -> bool:

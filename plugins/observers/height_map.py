@@ -44,11 +44,10 @@ def circular_grid(radius: float, rings: int, per_ring: int) -> torch.Tensor:
     return xy.reshape(-1, 2)
 
 
-class HeightMap(Observer):
+class HeightMap(Observer[HeightMapConfig]):
     """Scene heights on a circular grid around the root in its heading frame (120 points)."""
 
     name = "height_map"
-    Config = HeightMapConfig
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         super().__init__(config)

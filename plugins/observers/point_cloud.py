@@ -26,6 +26,7 @@ and only re-placed at resets.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from pydantic import Field
@@ -35,6 +36,8 @@ from retarget import Layout, Observer, ObsSpec, PluginConfig, StepContext
 
 if TYPE_CHECKING:
     import torch
+
+    from retarget import Scene
 
 
 class PointCloudConfig(PluginConfig):
@@ -66,34 +69,43 @@ def morton_order(xy: torch.Tensor, cell: float) -> torch.Tensor:
     return torch.argsort(code * xy.shape[1] + rank, dim=1)
 
 
-class PointCloud(Observer):
+@dataclass
+class _Pool:
+    """Every environment's sampled surface points, Z-ordered in chunks with their boxes."""
+
+    points: torch.Tensor  # (N, chunks * chunk, 3) world, Z-ordered
+    rank: torch.Tensor  # (N, chunks * chunk) pool index (pad: pool)
+    lo: torch.Tensor  # (N, chunks, 3) chunk bounding boxes
+    hi: torch.Tensor
+    scene: Scene  # the scene they were drawn from
+    dirty: torch.Tensor  # (N,) environments reset since: their props moved
+
+    def parts(self) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+        return self.points, self.rank, self.lo, self.hi
+
+
+class PointCloud(Observer[PointCloudConfig]):
     """Up to 1000 scene surface points within 1 m of the root, heading frame, with a mask."""
 
     name = "point_cloud"
-    Config = PointCloudConfig
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         super().__init__(config)
-        self._pool: torch.Tensor | None = None  # (N, chunks * chunk, 3) world, Z-ordered
-        self._rank: torch.Tensor | None = None  # (N, chunks * chunk) pool index (pad: pool)
-        self._lo: torch.Tensor | None = None  # (N, chunks, 3) chunk bounding boxes
-        self._hi: torch.Tensor | None = None
-        self._scene: object = None
+        self._pool: _Pool | None = None
         self._order: torch.Tensor | None = None  # (pool,) Z-order of the first placement
         self._local: torch.Tensor | None = None  # prop-frame samples of a prop scene
         self._global = False  # the scene gives world samples only (no prop frames)
-        self._dirty: torch.Tensor | None = None
         self._any_dirty = False
 
     def spec(self, layout: Layout) -> ObsSpec:
         return ObsSpec((self.config.count, 4))
 
     def reset(self, env_ids: torch.Tensor) -> None:
-        if self._dirty is not None and env_ids.numel():
-            self._dirty[env_ids] = True
+        if self._pool is not None and env_ids.numel():
+            self._pool.dirty[env_ids] = True
             self._any_dirty = True
 
-    def _sample(self, scene, rows: int) -> tuple[torch.Tensor, bool]:
+    def _sample(self, scene: Scene, rows: int) -> tuple[torch.Tensor, bool]:
         """Pool points of ``rows`` environments, and whether they are already in Z-order."""
         import numpy as np
         import torch
@@ -116,7 +128,9 @@ class PointCloud(Observer):
             pts = pts[:1].expand(rows, -1, -1)
         return pts, presorted
 
-    def _chunked(self, pts: torch.Tensor, presorted: bool = False) -> tuple[torch.Tensor, ...]:
+    def _chunked(
+        self, pts: torch.Tensor, presorted: bool = False
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
         """Z-ordered, padded points, their pool indices and chunk boxes for rows ``pts``."""
         import torch
         e, c = pts.shape[:2]
@@ -136,23 +150,24 @@ class PointCloud(Observer):
         boxes = padded.reshape(e, chunks, size, 3)
         return padded.contiguous(), rank, boxes.amin(2), boxes.amax(2)
 
-    def _refresh(self, ctx: StepContext) -> None:
+    def _refresh(self, scene: Scene, n: int) -> _Pool:
         import torch
-        n = ctx.num_envs
-        if self._pool is None or self._scene is not ctx.scene or self._pool.shape[0] != n:
+        held = self._pool
+        if held is None or held.scene is not scene or held.points.shape[0] != n:
             self._order = self._local = None
             self._global = False
-            self._pool, self._rank, self._lo, self._hi = self._chunked(*self._sample(ctx.scene, n))
-            self._scene = ctx.scene
-            self._dirty = torch.zeros(n, dtype=torch.bool)
+            parts = self._chunked(*self._sample(scene, n))
+            held = _Pool(*parts, scene=scene, dirty=torch.zeros(n, dtype=torch.bool))
+            self._pool = held
             self._any_dirty = False
         elif self._any_dirty:
-            ids = self._dirty.nonzero()[:, 0]
-            parts = self._chunked(*self._sample(ctx.scene.select(ids), ids.shape[0]))
-            for held, new in zip((self._pool, self._rank, self._lo, self._hi), parts, strict=True):
-                held[ids] = new
-            self._dirty.zero_()
+            ids = held.dirty.nonzero()[:, 0]
+            parts = self._chunked(*self._sample(scene.select(ids), ids.shape[0]))
+            for old, new in zip(held.parts(), parts, strict=True):
+                old[ids] = new
+            held.dirty.zero_()
             self._any_dirty = False
+        return held
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
         import torch
@@ -162,8 +177,7 @@ class PointCloud(Observer):
         out = torch.zeros(n, k, 4)
         if ctx.scene is None:
             return out
-        self._refresh(ctx)
-        pool, rank, lo, hi = self._pool, self._rank, self._lo, self._hi
+        pool, rank, lo, hi = self._refresh(ctx.scene, n).parts()
         root = ctx.sim.qpos[:, :3].float()
         r2 = self.config.radius**2
         # (environment, chunk) pairs whose box the root's sphere reaches (box-sphere distance)

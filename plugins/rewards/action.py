@@ -23,14 +23,13 @@ class ActionDiffConfig(RewardConfig):
     k: float = Field(10.0, gt=0, description="kernel sensitivity on mean((a_t - a_{t-1})^2)")
 
 
-class ActionDiff(RewardTerm):
+class ActionDiff(RewardTerm[ActionDiffConfig]):
     """Rewards smooth control: exp(-k * mean((a_t - a_{t-1})^2)).
 
     Table 2: Jesse (the default) w=1.5, k=10; Oppy and Dino w=2, k=150.
     """
 
     name = "action_diff"
-    Config = ActionDiffConfig
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
         d = (ctx.action - ctx.prev_action).square().mean(dim=-1)
@@ -42,14 +41,13 @@ class ActionMinConfig(RewardConfig):
     k: float = Field(25.0, gt=0, description="kernel sensitivity on mean(a_t^2)")
 
 
-class ActionMin(RewardTerm):
+class ActionMin(RewardTerm[ActionMinConfig]):
     """Rewards small torques: exp(-k * mean(a_t^2)).
 
     Table 2: Jesse (the default) w=0.5, k=25; Oppy and Dino w=0.2, k=25.
     """
 
     name = "action_min"
-    Config = ActionMinConfig
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
         d = ctx.action.square().mean(dim=-1)

@@ -33,7 +33,7 @@ class FootContactConfig(RewardConfig):
     normalize: bool = Field(False, description="use the fraction of mismatches, not the count")
 
 
-class FootContact(RewardTerm):
+class FootContact(RewardTerm[FootContactConfig]):
     """Simulated foot contacts match the human's labels: exp(-k * #mismatches).
 
     Table 2: Oppy and Dino w=1.5, k=1; Jesse (the default) w=0, i.e. off, since its imitation
@@ -41,7 +41,6 @@ class FootContact(RewardTerm):
     """
 
     name = "foot_contact"
-    Config = FootContactConfig
     requires = ("body_group:feet",)
 
     def bind(self, layout: Layout) -> None:

@@ -21,14 +21,13 @@ class FailPenaltyConfig(RewardConfig):
     value: float = Field(-5.0, description="reward added on the step an episode fails")
 
 
-class FailPenalty(RewardTerm):
+class FailPenalty(RewardTerm[FailPenaltyConfig]):
     """Adds ``value`` (-5 for every character in Table 2) on the step an episode fails.
 
     ``value`` where ``ctx.terminated`` (the step's failures), else 0.
     """
 
     name = "fail_penalty"
-    Config = FailPenaltyConfig
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
         import torch

@@ -27,7 +27,7 @@ class JointPosConfig(RewardConfig):
     reduce: Reduce = Field("sum", description="sum over joints (paper) or weight-normalised mean")
 
 
-class JointPos(RewardTerm):
+class JointPos(RewardTerm[JointPosConfig]):
     """Joint angles follow the reference: exp(-k * sum_j w_j (q_sim,j - q_ref,j)^2).
 
     Angle differences are wrapped to [-pi, pi) so an unlimited hinge that went once around is
@@ -35,7 +35,6 @@ class JointPos(RewardTerm):
     """
 
     name = "joint_pos"
-    Config = JointPosConfig
 
     def bind(self, layout: Layout) -> None:
         self._weights = joint_weight_tensor(layout, self.name)
@@ -54,7 +53,7 @@ class JointVelConfig(RewardConfig):
     reduce: Reduce = Field("sum", description="sum over joints (paper) or weight-normalised mean")
 
 
-class JointVel(RewardTerm):
+class JointVel(RewardTerm[JointVelConfig]):
     """Joint velocities follow the reference: exp(-k * sum_j w_j (dq_sim,j - dq_ref,j)^2).
 
     Uses the same per-joint weights as ``joint_pos``. Table 2: Jesse (the default) w=0.5, k=1;
@@ -62,7 +61,6 @@ class JointVel(RewardTerm):
     """
 
     name = "joint_vel"
-    Config = JointVelConfig
 
     def bind(self, layout: Layout) -> None:
         self._weights = joint_weight_tensor(layout, self.name)

@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from pydantic import Field
+from typing_extensions import TypeVar
 
 import retarget
 from retarget import Layout, RewardConfig, RewardTerm, StepContext, gaussian_kernel
@@ -27,15 +28,23 @@ _RELATIVE = (
 )
 
 
-class LinkPosConfig(RewardConfig):
-    weight: float = 2.5
-    k: float = Field(6.0, gt=0, description="kernel sensitivity on the squared distance, 1/m^2")
+class LinkTermConfig(RewardConfig):
+    """What both link terms select and how they sum."""
+
     bodies: list[str] | None = Field(None, description=_BODIES)
     root_relative: bool = Field(False, description=_RELATIVE)
     reduce: Reduce = Field("sum", description="sum over bodies (paper) or mean")
 
 
-class _LinkTerm(RewardTerm):
+LinkConfigT = TypeVar("LinkConfigT", bound=LinkTermConfig, default=LinkTermConfig)
+
+
+class LinkPosConfig(LinkTermConfig):
+    weight: float = 2.5
+    k: float = Field(6.0, gt=0, description="kernel sensitivity on the squared distance, 1/m^2")
+
+
+class _LinkTerm(RewardTerm[LinkConfigT]):
     """Shared body selection and distance of the two link terms."""
 
     def bind(self, layout: Layout) -> None:
@@ -51,7 +60,7 @@ class _LinkTerm(RewardTerm):
         return weighted_sq_distance(diff, self._weights, self.config.reduce)
 
 
-class LinkPos(_LinkTerm):
+class LinkPos(_LinkTerm[LinkPosConfig]):
     """Body positions follow the reference: exp(-k * sum_b ||x_sim,b - x_ref,b||^2).
 
     Table 2: Jesse (the default) w=2.5, k=6 with root and end effectors; Oppy and Dino w=1, k=6
@@ -59,29 +68,24 @@ class LinkPos(_LinkTerm):
     """
 
     name = "link_pos"
-    Config = LinkPosConfig
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
         d = self._distance(ctx.sim.body_pos, ctx.ref.pose.body_pos)
         return gaussian_kernel(d, self.config.k).float()
 
 
-class LinkVelConfig(RewardConfig):
+class LinkVelConfig(LinkTermConfig):
     weight: float = 0.7
     k: float = Field(2.0, gt=0, description="kernel sensitivity on the squared error, s^2/m^2")
-    bodies: list[str] | None = Field(None, description=_BODIES)
-    root_relative: bool = Field(False, description=_RELATIVE)
-    reduce: Reduce = Field("sum", description="sum over bodies (paper) or mean")
 
 
-class LinkVel(_LinkTerm):
+class LinkVel(_LinkTerm[LinkVelConfig]):
     """Body linear velocities follow the reference: exp(-k * sum_b ||v_sim,b - v_ref,b||^2).
 
     Table 2: Jesse (the default) w=0.7, k=2; Oppy and Dino do not use it (w=0).
     """
 
     name = "link_vel"
-    Config = LinkVelConfig
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
         d = self._distance(ctx.sim.body_linvel, ctx.ref.pose.body_linvel)

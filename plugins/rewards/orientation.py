@@ -27,7 +27,7 @@ class OrientationConfig(RewardConfig):
     head_weight: float = Field(1.0, ge=0, description="weight of the head site's angle error")
 
 
-class Orientation(RewardTerm):
+class Orientation(RewardTerm[OrientationConfig]):
     """Root and head orientation follow the human: exp(-k * (w_r d_root + w_h d_head)).
 
     Each distance is the axis-angle norm of ``q_ref * q_sim^-1`` in radians (App. A). Table 2:
@@ -35,7 +35,6 @@ class Orientation(RewardTerm):
     """
 
     name = "orientation"
-    Config = OrientationConfig
     requires = ("site:head",)
 
     def bind(self, layout: Layout) -> None:

@@ -53,11 +53,10 @@ class SceneContactConfig(RewardConfig):
     )
 
 
-class SceneContact(RewardTerm):
+class SceneContact(RewardTerm[SceneContactConfig]):
     """Multi-hot contact of feet, hands, pelvis and spine matches the scene labels (Eq. 3)."""
 
     name = "contact"
-    Config = SceneContactConfig
     requires = tuple(f"body_group:{g}" for g in LINKS)
 
     def bind(self, layout: Layout) -> None:

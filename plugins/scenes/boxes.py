@@ -44,11 +44,10 @@ class BoxesConfig(PropSceneConfig):
     boxes: tuple[BoxSpec, ...] = Field((), description="further boxes")
 
 
-class Boxes(PropScene):
+class Boxes(PropScene[BoxesConfig]):
     """Boxes on the floor (a preset plus a configurable list of size, position and yaw)."""
 
     name = "boxes"
-    Config = BoxesConfig
 
     def specs(self) -> tuple[BoxSpec, ...]:
         return PRESETS[self.config.preset] + tuple(self.config.boxes)

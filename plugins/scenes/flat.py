@@ -22,7 +22,7 @@ class FlatConfig(PluginConfig):
     )
 
 
-class Flat(Scene):
+class Flat(Scene[FlatConfig]):
     """An infinite flat floor at z = 0; nothing to randomize.
 
     The floor has no props, so its surface points are drawn on the floor inside a square of
@@ -30,7 +30,6 @@ class Flat(Scene):
     """
 
     name = "flat"
-    Config = FlatConfig
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         super().__init__(config)

@@ -8,6 +8,7 @@ side: the paper's living-room example combines objects seen in different trainin
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from pydantic import Field
 
@@ -19,7 +20,7 @@ from retarget.plugins.scenes.couch import Couch
 from retarget.plugins.scenes.stool import Stool
 from retarget.scene.props import Prop, PropScene, PropSceneConfig
 
-LAYOUT: tuple[tuple[type[PropScene], tuple[float, float], float], ...] = (
+LAYOUT: tuple[tuple[type[PropScene[Any]], tuple[float, float], float], ...] = (
     (Couch, (0.0, 2.2), -math.pi / 2),
     (Stool, (1.4, 1.6), 0.0),
     (Chair, (-1.6, 1.4), -math.pi / 4),
@@ -34,11 +35,10 @@ class LivingRoomConfig(PropSceneConfig):
     yaw: float = Field(0.0, description="rotation of the room about +Z (rad)")
 
 
-class LivingRoom(PropScene):
+class LivingRoom(PropScene[LivingRoomConfig]):
     """A living room: couch, stool, chair, bench and a box around a free centre."""
 
     name = "living_room"
-    Config = LivingRoomConfig
 
     def props(self) -> list[Prop]:
         out = []

@@ -21,7 +21,7 @@ scene is not randomized. Without ``path`` the scene is the bare floor.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from pydantic import Field
 
@@ -98,26 +98,25 @@ def hull_safe(verts):
     return np.concatenate([verts, verts + 0.02 * normal])
 
 
-class MeshScene(Scene):
+class MeshScene(Scene[MeshConfig]):
     """A scene from a mesh file (OBJ/PLY/GLB) as a height field or convex pieces, on a floor."""
 
     name = "mesh"
-    Config = MeshConfig
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         super().__init__(config)
         self._num_envs = 1
         self.mesh = load_mesh(self.config) if self.config.path else None
-        self._grid = self._rasterise() if self.mesh is not None else None
+        self._grid = self._rasterise(self.mesh) if self.mesh is not None else None
 
     # ---------------------------------------------------------------- geometry
 
-    def _rasterise(self) -> dict:
+    def _rasterise(self, mesh: Any) -> dict[str, Any]:
         """Top-surface heights on a grid over the mesh's footprint (grid points at the
         corners of ``resolution`` cells, as MuJoCo's height field places its samples)."""
         import mujoco
         import numpy as np
-        mesh, res = self.mesh, self.config.resolution
+        res = self.config.resolution
         lo, hi = mesh.bounds[0, :2], mesh.bounds[1, :2]
         ncol = max(int(np.ceil((hi[0] - lo[0]) / res)) + 1, 2)
         nrow = max(int(np.ceil((hi[1] - lo[1]) / res)) + 1, 2)
@@ -156,14 +155,13 @@ class MeshScene(Scene):
         add_floor(spec)
         if self.mesh is None:
             return
-        if self.config.collision == "heightfield":
-            self._add_heightfield(spec)
+        if self.config.collision == "heightfield" and self._grid is not None:
+            self._add_heightfield(spec, self._grid)
         else:
-            self._add_hulls(spec)
+            self._add_hulls(spec, self.mesh)
 
-    def _add_heightfield(self, spec: mujoco.MjSpec) -> None:
+    def _add_heightfield(self, spec: mujoco.MjSpec, g: dict[str, Any]) -> None:
         import mujoco
-        g = self._grid
         h = g["heights"]
         zmax = float(h.max())
         if zmax <= 0:
@@ -187,10 +185,10 @@ class MeshScene(Scene):
             rgba=[0.6, 0.6, 0.65, 1.0],
         )
 
-    def _add_hulls(self, spec: mujoco.MjSpec) -> None:
+    def _add_hulls(self, spec: mujoco.MjSpec, mesh: Any) -> None:
         import mujoco
         import numpy as np
-        for k, piece in enumerate(self.mesh.split(only_watertight=False)):
+        for k, piece in enumerate(mesh.split(only_watertight=False)):
             verts = np.asarray(piece.vertices, dtype=float)
             if len(verts) < 3:
                 continue

@@ -151,11 +151,10 @@ def _same(a: PropSpec, b: PropSpec) -> bool:
                                                strict=True)) < 0.02)  # fmt: skip
 
 
-class MotionProps(PropScene):
+class MotionProps(PropScene[MotionPropsConfig]):
     """Seats and boxes where the motions need them: listed, from sidecars, or fitted."""
 
     name = "motion_props"
-    Config = MotionPropsConfig
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         import torch

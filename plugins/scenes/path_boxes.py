@@ -64,11 +64,10 @@ class PathBoxesConfig(PropSetConfig):
         return self
 
 
-class PathBoxes(PropScene):
+class PathBoxes(PropScene[PathBoxesConfig]):
     """Boxes re-drawn every episode on the reference root's ground path (see module doc)."""
 
     name = "path_boxes"
-    Config = PathBoxesConfig
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         import torch

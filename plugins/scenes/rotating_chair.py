@@ -29,11 +29,10 @@ class RotatingChairConfig(PropSceneConfig):
     friction: float = Field(0.5, ge=0, description="N m of dry friction of the swivel")
 
 
-class RotatingChair(PropScene):
+class RotatingChair(PropScene[RotatingChairConfig]):
     """An office chair: round 50 cm seat (top at 47 cm) and backrest on a damped swivel."""
 
     name = "rotating_chair"
-    Config = RotatingChairConfig
 
     def props(self) -> list[Prop]:
         seat_z = SEAT_TOP - SEAT_THICK / 2

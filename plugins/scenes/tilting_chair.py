@@ -21,11 +21,10 @@ class TiltingChairConfig(PropSceneConfig):
     max_tilt: float = Field(0.35, gt=0, description="hinge limit either way, radians")
 
 
-class TiltingChair(PropScene):
+class TiltingChair(PropScene[TiltingChairConfig]):
     """A dining chair whose seat and backrest tilt on a hinge with a spring-damper."""
 
     name = "tilting_chair"
-    Config = TiltingChairConfig
 
     def props(self) -> list[Prop]:
         cfg = self.config

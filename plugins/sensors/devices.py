@@ -17,6 +17,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from pydantic import Field
+from typing_extensions import TypeVar
 
 import retarget
 from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
@@ -47,7 +48,10 @@ class ThreePointConfig(HmdConfig):
     )
 
 
-class _DeviceSensor(Sensor):
+DeviceConfigT = TypeVar("DeviceConfigT", bound=HmdConfig, default=HmdConfig)
+
+
+class _DeviceSensor(Sensor[DeviceConfigT]):
     """Window selection and heading-frame transform shared by the device sensors."""
 
     def __init__(self, config: PluginConfig | None = None) -> None:
@@ -116,7 +120,7 @@ class _DeviceSensor(Sensor):
         return vectors[..., 0, :], vectors[..., 1:, :].flatten(-2)
 
 
-class Hmd(_DeviceSensor):
+class Hmd(_DeviceSensor[HmdConfig]):
     """Headset only: position (3) and 6D orientation (6) per frame, in the heading frame.
 
     The 1-point setting of QuestEnvSim: enough for plausible whole-body motion, with the arms
@@ -124,7 +128,6 @@ class Hmd(_DeviceSensor):
     """
 
     name = "hmd"
-    Config = HmdConfig
     requires = ("site:head",)
 
     def _features_per_frame(self) -> int:
@@ -136,7 +139,7 @@ class Hmd(_DeviceSensor):
         return torch.cat([pos, rot], dim=-1).reshape(ctx.num_envs, -1).float()
 
 
-class ThreePoint(_DeviceSensor):
+class ThreePoint(_DeviceSensor[ThreePointConfig]):
     """Headset pose and both controllers, per frame, in the character's heading frame.
 
     Per frame: headset position (3) + 6D orientation (6), then left and right controller
@@ -146,7 +149,6 @@ class ThreePoint(_DeviceSensor):
     """
 
     name = "three_point"
-    Config = ThreePointConfig
     requires = ("site:head", "site:left_hand", "site:right_hand")
 
     def _features_per_frame(self) -> int:

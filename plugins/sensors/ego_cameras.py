@@ -49,7 +49,7 @@ class EgoCamerasConfig(PluginConfig):
     seed: int = Field(0, ge=0, le=2**31 - 1, description="seed of the augmentation bank")
 
 
-class EgoCameras(Sensor):
+class EgoCameras(Sensor[EgoCamerasConfig]):
     """Grayscale views ``(C, H, W)`` in [0, 1] from the headset's cameras (SimXR's input).
 
     Rendered from the reference motion once per library frame and read back each step; the
@@ -57,13 +57,11 @@ class EgoCameras(Sensor):
     """
 
     name = "ego_cameras"
-    Config = EgoCamerasConfig
     recorded = "images"
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         super().__init__(config)
         cfg = self.config
-        assert isinstance(cfg, EgoCamerasConfig)
         self.rig = RIGS[cfg.rig] if isinstance(cfg.rig, str) else cfg.rig
         self._images: torch.Tensor | None = None
         self._owned = False  # whether _images is this sensor's own copy (after a replay)

@@ -13,7 +13,7 @@ exactly as in its training (the character's root replaced by the headset's groun
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from pydantic import Field
 
@@ -31,57 +31,71 @@ class EstimatedBodyConfig(PluginConfig):
     )  # fmt: skip
 
 
-class EstimatedBody(Sensor):
+class EstimatedBody(Sensor[EstimatedBodyConfig]):
     """A trained pose estimator's body, contacts and uncertainty from the device window."""
 
     name = "estimated_body"
-    Config = EstimatedBodyConfig
     requires = ("site:head", "site:left_hand", "site:right_hand")
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         super().__init__(config)
-        self._net = None
-        self._inner: list[Sensor] = []
+        self._net: torch.nn.Module | None = None
+        self._inner: list[Sensor[Any]] = []
+        self._width = 0
 
     def bind(self, layout: Layout) -> None:
         super().bind(layout)
         self._layout = layout
+        if self.config.estimator is None:
+            self._bind_untrained(layout)
+        else:
+            self._bind_run(layout, self.config.estimator)
+        self._width = sum(int(s.spec(layout).size) for s in self._inner)
+
+    def _bind_untrained(self, layout: Layout) -> None:
+        """A fixed, untrained estimator over three-point devices (tests, the contract kit)."""
         import torch
 
         from retarget.learn.estimator import DeployedEstimator, PoseNet
 
-        cfg = self.config
-        assert isinstance(cfg, EstimatedBodyConfig)
-        registry = self.registry or retarget.load_plugins()  # the recipe's, when connected
-        if cfg.estimator is None:
-            cls = registry.get("sensor", "three_point").cls
-            self._inner = [cls(cls.Config.model_validate({"past": 2}))]
-            self._inner[0].bind(layout)
-            size = sum(s.spec(layout).size for s in self._inner)
-            with torch.random.fork_rng(devices=[]):  # a fixed net; the run's RNG untouched
-                torch.manual_seed(0)
-                self._net = DeployedEstimator(PoseNet(size, (64,))).eval()
-            return
+        if self.registry is not None:  # the recipe's own three_point, when connected
+            cls = self.registry.get("sensor", "three_point").cls
+        else:
+            from retarget.plugins.sensors.devices import ThreePoint as cls
+        inner = cls(cls.Config.model_validate({"past": 2}))
+        inner.bind(layout)
+        self._inner = [inner]
+        size = int(inner.spec(layout).size)
+        with torch.random.fork_rng(devices=[]):  # a fixed net; the run's RNG untouched
+            torch.manual_seed(0)
+            self._net = DeployedEstimator(PoseNet(size, (64,))).eval()
+
+    def _bind_run(self, layout: Layout, run: str) -> None:
+        """The estimator run's own sensors and deployed network, resolved against the
+        recipe's plugins (as a student resolves its teacher)."""
         from retarget.motion.procedural import idle_clip
         from retarget.train.load import load_run
 
-        loaded = load_run(cfg.estimator, registry, num_envs=1, clips=[idle_clip(2.0)])
-        estimator = loaded.algorithm.pose_estimator()
-        if estimator is None:
-            raise PluginError(f"{cfg.estimator} is not a pose estimator run", plugin=self.name)
+        if self.registry is None:
+            raise PluginError(
+                "needs the plugin registry to load its estimator run", plugin=self.name,
+                hint="environments built from a recipe connect(registry) before bind",
+            )
+        loaded = load_run(run, self.registry, num_envs=1, clips=[idle_clip(2.0)])
+        if loaded.algorithm.pose_estimator() is None:
+            raise PluginError(f"{run} is not a pose estimator run", plugin=self.name)
         if loaded.env.observers:
-            raise PluginError(f"{cfg.estimator} reads the scene (observers); as a sensor only "
+            raise PluginError(f"{run} reads the scene (observers); as a sensor only "
                               "device-only estimators are supported", plugin=self.name)  # fmt: skip
         self._inner = list(loaded.env.sensors)
         for sensor in self._inner:
             sensor.bind(layout)
-        self._net = DeployedEstimator(estimator.net).eval()
+        self._net = loaded.algorithm.policy()[1].eval()
 
-    def deployable(self):
+    def deployable(self) -> tuple[torch.nn.Module, int, dict[str, Any]]:
         if self._net is None:
             raise PluginError("deployable() before bind(layout)", plugin=self.name)
-        width = int(self._net.net.norm.mean.shape[0])
-        return self._net, width, {
+        return self._net, self._width, {
             "frame": "headset (the current headset's ground point and heading)",
             "inputs": [{"name": s.name, "size": int(s.spec(self._layout).size)}
                        for s in self._inner],

@@ -43,7 +43,7 @@ class FullBodyConfig(PluginConfig):
     _check = field_validator("offsets")(classmethod(lambda cls, v: _offsets_valid(v)))
 
 
-class FullBody(Sensor):
+class FullBody(Sensor[FullBodyConfig]):
     """The whole reference body ahead, relative to the simulated body (teacher input).
 
     Per offset and body: rotation difference sim->reference (6D, body frame), position
@@ -53,7 +53,6 @@ class FullBody(Sensor):
     """
 
     name = "full_body"
-    Config = FullBodyConfig
 
     def needs(self) -> StepNeeds:
         return StepNeeds(reference_offsets=tuple(self.config.offsets))
@@ -110,7 +109,7 @@ class ReferenceActionConfig(PluginConfig):
     offset: int = Field(1, ge=1, le=360, description="reference frame whose joint angles to use")
 
 
-class ReferenceAction(Sensor):
+class ReferenceAction(Sensor[ReferenceActionConfig]):
     """The reference's joint angles ``offset`` frames ahead as PD-target actions in [-1, 1].
 
     ``target / scale`` per actuator, ``scale`` the larger magnitude of its joint range, clamped
@@ -119,7 +118,6 @@ class ReferenceAction(Sensor):
     """
 
     name = "reference_action"
-    Config = ReferenceActionConfig
 
     def bind(self, layout: Layout) -> None:
         import torch

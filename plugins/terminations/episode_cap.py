@@ -19,11 +19,10 @@ class EpisodeCapConfig(PluginConfig):
     )
 
 
-class EpisodeCap(Termination):
+class EpisodeCap(Termination[EpisodeCapConfig]):
     """Ends an episode after ``max_steps`` control steps (a truncation, not a failure)."""
 
     name = "episode_cap"
-    Config = EpisodeCapConfig
     time_out = True
 
     def check(self, ctx: StepContext) -> torch.Tensor:

@@ -36,11 +36,10 @@ class FallConfig(PluginConfig):
     )
 
 
-class Fall(Termination):
+class Fall(Termination[FallConfig]):
     """Fails an episode when any upper-body body touches the ground (force and height test)."""
 
     name = "fall"
-    Config = FallConfig
     requires = ("body_group:upper_body",)
 
     def bind(self, layout: Layout) -> None:

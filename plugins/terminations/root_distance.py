@@ -23,11 +23,10 @@ class RootDistanceConfig(PluginConfig):
     horizontal: bool = Field(False, description="measure in the ground plane only (ignore z)")
 
 
-class RootDistance(Termination):
+class RootDistance(Termination[RootDistanceConfig]):
     """Fails an episode when the root is over ``max_distance`` (0.3 m) from the reference root."""
 
     name = "root_distance"
-    Config = RootDistanceConfig
 
     def check(self, ctx: StepContext) -> torch.Tensor:
         dims = 2 if self.config.horizontal else 3

@@ -36,7 +36,7 @@ def test_the_update_learns_from_the_rollout_before(tmp_path: Path) -> None:
     assert waiting is not None
     before = {k: v.clone() for k, v in ppo.actor.state_dict().items()}
     acted = waiting.actions.clone()
-    stats = t.algorithm.train_iteration(t.env)
+    stats = t.algorithm.train_iteration(t.env).stats
     assert t.env.total_steps == 3 * SAMPLES
     changed = any(not torch.equal(before[k], v) for k, v in ppo.actor.state_dict().items())
     assert changed, "the update ran"

@@ -18,7 +18,7 @@ def test_placed_and_self_placing_scene_configs_share_the_base() -> None:
     assert not issubclass(PathBoxesConfig, PropSceneConfig)  # it places its own boxes
     stool = Stool(Stool.Config(position=(2.0, -1.0), yaw=0.0, density=800.0))
     (prop,) = stool.placed_props()
-    assert prop.xy == pytest.approx((2.0, -1.0)) and stool.props_config.density == 800.0
+    assert prop.xy == pytest.approx((2.0, -1.0)) and stool.config.density == 800.0
 
 
 def test_a_prop_scene_with_a_foreign_config_is_refused() -> None:

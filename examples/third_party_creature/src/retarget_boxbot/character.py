@@ -29,11 +29,10 @@ class BoxbotConfig(retarget.PluginConfig):
     max_torque: float = Field(200.0, gt=0.0, le=2000.0, description="hip and spine torque, N m")
 
 
-class Boxbot(retarget.Character):
+class Boxbot(retarget.Character[BoxbotConfig]):
     """A blocky robot: box torso and feet, capsule limbs, ball hips, shoulders and spine."""
 
     name = "boxbot"
-    Config = BoxbotConfig
 
     def build_spec(self):
         c = self.config

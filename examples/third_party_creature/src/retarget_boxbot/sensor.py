@@ -21,11 +21,10 @@ class HeadVelocityConfig(retarget.PluginConfig):
     scale: float = Field(1.0, gt=0.0, le=100.0, description="multiplies the velocity (m/s)")
 
 
-class HeadVelocity(retarget.Sensor):
+class HeadVelocity(retarget.Sensor[HeadVelocityConfig]):
     """Headset linear velocity (m/s, world frame) from the current and previous reading."""
 
     name = "head_velocity"
-    Config = HeadVelocityConfig
 
     def spec(self, layout: retarget.Layout) -> retarget.ObsSpec:
         return retarget.ObsSpec((3,))
@@ -34,7 +33,6 @@ class HeadVelocity(retarget.Sensor):
         return (1, 0)
 
     def observe(self, ctx: retarget.StepContext) -> torch.Tensor:
-        assert isinstance(self.config, HeadVelocityConfig)
         offsets = ctx.ref.window_offsets
         now, before = offsets.index(0), offsets.index(-1)
         head = ctx.ref.devices[:, :, 0, :3]

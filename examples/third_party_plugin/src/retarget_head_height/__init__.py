@@ -21,7 +21,7 @@ class HeadHeightConfig(retarget.RewardConfig):
     k: float = Field(20.0, gt=0, description="kernel sensitivity per metre of height error")
 
 
-class HeadHeight(retarget.RewardTerm):
+class HeadHeight(retarget.RewardTerm[HeadHeightConfig]):
     """Rewards keeping the headset at the reference height: exp(-k * |z_sim - z_ref|).
 
     Useful for crouching and sitting clips, where horizontal tracking alone lets the character
@@ -29,7 +29,6 @@ class HeadHeight(retarget.RewardTerm):
     """
 
     name = "head_height"
-    Config = HeadHeightConfig
     requires = ("site:head",)
 
     def bind(self, layout: retarget.Layout) -> None:

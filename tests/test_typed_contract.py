@@ -1,0 +1,106 @@
+"""The typed contract: a plugin names its config as its base's parameter, and an iteration
+returns a typed result (statistics, samples learnt from, the progress bar's figures)."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+
+import retarget
+from retarget import IterationResult, PluginConfig
+from retarget.kinds.iteration import as_result
+from retarget.testing import checks
+
+
+class HeightConfig(PluginConfig):
+    limit: float = 0.5
+
+
+class Low(retarget.Termination[HeightConfig]):
+    """Ends an episode when the root is low."""
+
+    name = "low"
+
+    def check(self, ctx: retarget.StepContext) -> torch.Tensor:
+        return ctx.sim.qpos[:, 2] < self.config.limit
+
+
+def test_the_base_parameter_is_the_config() -> None:
+    assert Low.Config is HeightConfig
+    assert Low().config == HeightConfig() and Low({"limit": 0.2}).config.limit == 0.2
+    with pytest.raises(Exception, match="limit"):
+        Low({"limit": "high"})
+
+
+def test_a_config_that_contradicts_the_parameter_is_refused_at_class_definition() -> None:
+    class Other(PluginConfig):
+        pass
+
+    with pytest.raises(TypeError, match="HeightConfig named in its base"):
+        class Clash(retarget.Termination[HeightConfig]):
+            """Clashes."""
+
+            name = "clash"
+            Config = Other
+
+            def check(self, ctx):
+                return ctx.sim.qpos[:, 2] < 0
+
+
+def test_setting_config_in_the_body_still_works() -> None:
+    class Plain(retarget.Termination):
+        """Old style."""
+
+        name = "plain"
+        Config = HeightConfig
+
+        def check(self, ctx):
+            return ctx.sim.qpos[:, 2] < self.config.limit
+
+    assert Plain().config.limit == 0.5
+
+
+def test_built_in_plugins_name_their_config() -> None:
+    from retarget.plugins.rewards.link import LinkPos, LinkPosConfig
+    from retarget.plugins.scenes.boxes import Boxes, BoxesConfig
+
+    assert LinkPos.Config is LinkPosConfig and Boxes.Config is BoxesConfig
+
+
+def test_iteration_results_hold_numbers() -> None:
+    result = IterationResult(stats={"loss": torch.tensor(0.5).item(), "n": 3})
+    assert result.stats == {"loss": 0.5, "n": 3.0} and result.samples is None
+    with pytest.raises(TypeError, match="'what'"):
+        IterationResult(stats={"what": "text"})
+    with pytest.raises(ValueError, match="samples"):
+        IterationResult(stats={}, samples=-1)
+    assert IterationResult(stats={"x": float("nan")}).non_finite().keys() == {"x"}
+    assert as_result({"loss": 1.0}).stats == {"loss": 1.0}
+    with pytest.raises(TypeError, match="IterationResult"):
+        as_result([1.0])  # type: ignore[arg-type]
+
+
+def test_a_kinematic_algorithm_must_count_its_samples() -> None:
+    """Without stepping the environment, an uncounted iteration never spends the budget."""
+    from retarget.plugins.algorithms.estimator import Estimator
+
+    class Uncounted(Estimator):
+        """Forgets to say how many samples it learnt from."""
+
+        name = "uncounted"
+
+        def train_iteration(self, env):
+            return dict(super().train_iteration(env).stats)
+
+    checks.check_algorithm_update(Estimator)
+    with pytest.raises(AssertionError, match="samples"):
+        checks.check_algorithm_update(Uncounted)
+
+
+def test_the_progress_bar_shows_the_iteration_headline() -> None:
+    from retarget.cli.train_cmd import _figures
+
+    last = {"loss": 0.25, "mpjpe_mm": 41.0, "episode_return": 3.0, "episode_length": 20.0}
+    assert _figures(last, ("loss", "mpjpe_mm")) == "loss   0.250  mpjpe  41.0 mm"
+    assert _figures(last, ("episode_return", "episode_length")).startswith("return    3.00")
+    assert _figures({"custom": 1.5}, ("custom", "absent")) == "custom 1.5"
