@@ -142,6 +142,7 @@ def main() -> None:
         print(f"{'policy (onnxruntime, batch 1)':<34} {onnx_ms:7.3f} ms")
     print(f"{'observations (in env frame)':<34} {obs_ms:7.3f} ms")
     print(f"{'env frame (env.step + policy)':<34} {env_ms:7.3f} ms")
+    print(f"{'observations / physics':<34} {obs_ms / physics_ms:7.2f}")
     print(
         f"deploy_ms={deploy_ms:.3f} env_frame_ms={env_ms:.3f} physics_ms={physics_ms:.3f} "
         f"realtime_x={frame_budget / deploy_ms:.1f} env_realtime_x={frame_budget / env_ms:.1f}"

@@ -103,7 +103,8 @@ def quat_to_6d(q: torch.Tensor) -> torch.Tensor:
     and this is three calls where the element-wise formulas take two dozen.
     """
     outer = (q.unsqueeze(-1) * q.unsqueeze(-2)).flatten(-2)
-    return outer @ _SIXD_M.to(q.dtype) + _SIXD_B.to(q.dtype)
+    m, b = _constants("sixd", q.dtype)
+    return outer @ m + b
 
 
 # vec(q q^T) (index 4 i + j holds q_i q_j, q = wxyz) -> the six entries of quat_to_6d
@@ -124,6 +125,19 @@ _FORWARD_M = torch.zeros(16, 2)
 _FORWARD_M[[10, 15], 0] = -2.0  # fx = 1 - 2 (y^2 + z^2)
 _FORWARD_M[[6, 9, 3, 12], 1] = 1.0  # fy = 2 (x y + w z), split over both symmetric entries
 _FORWARD_B = torch.tensor([1.0, 0.0])
+
+_CONSTANTS: dict[tuple[str, torch.dtype], tuple[torch.Tensor, torch.Tensor]] = {}
+
+
+def _constants(name: str, dtype: torch.dtype) -> tuple[torch.Tensor, torch.Tensor]:
+    """The quadratic-form matrices in ``dtype``, converted once (a conversion per call costs
+    as much as the product itself at batch 1)."""
+    key = (name, dtype)
+    found = _CONSTANTS.get(key)
+    if found is None:
+        m, b = (_SIXD_M, _SIXD_B) if name == "sixd" else (_FORWARD_M, _FORWARD_B)
+        found = _CONSTANTS[key] = (m.to(dtype), b.to(dtype))
+    return found
 
 
 def quat_angle(q: torch.Tensor) -> torch.Tensor:
@@ -155,9 +169,11 @@ def heading_cos_sin(q: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     which keeps everything finite.
     """
     outer = (q.unsqueeze(-1) * q.unsqueeze(-2)).flatten(-2)
-    forward = outer @ _FORWARD_M.to(q.dtype) + _FORWARD_B.to(q.dtype)
+    m, b = _constants("forward", q.dtype)
+    forward = outer @ m + b
     forward[..., 0] += 1e-12  # a vertical x axis normalises to heading 0, not to (0, 0)
-    forward = torch.nn.functional.normalize(forward, dim=-1, eps=1e-12)
+    # x / max(|x|, eps), as torch.nn.functional.normalize, in three direct calls
+    forward = forward / torch.linalg.vector_norm(forward, dim=-1, keepdim=True).clamp_min(1e-12)
     return forward[..., 0], forward[..., 1]
 
 
