@@ -28,6 +28,7 @@ from retarget.kinds import (
     Sensor,
     StepNeeds,
     Termination,
+    TrackingEnv,
     VecEnv,
     gaussian_kernel,
 )
@@ -65,6 +66,7 @@ __all__ = [
     "StepContext",
     "StepNeeds",
     "Termination",
+    "TrackingEnv",
     "VecEnv",
     "__version__",
     "gaussian_kernel",

@@ -104,3 +104,25 @@ def test_the_progress_bar_shows_the_iteration_headline() -> None:
     assert _figures(last, ("loss", "mpjpe_mm")) == "loss   0.250  mpjpe  41.0 mm"
     assert _figures(last, ("episode_return", "episode_length")).startswith("return    3.00")
     assert _figures({"custom": 1.5}, ("custom", "absent")) == "custom 1.5"
+
+
+def test_tracking_env_names_what_an_environment_lacks() -> None:
+    from retarget.kinds.tracking_env import tracking_env
+    from retarget.testing.fakes import FakeVecEnv
+
+    with pytest.raises(retarget.PluginError, match="has no layout, library"):
+        tracking_env(FakeVecEnv(num_envs=2), "estimator")
+
+
+def test_the_retarget_env_is_a_tracking_env() -> None:
+    from retarget.env.build import env_from_recipe
+    from retarget.kinds.tracking_env import tracking_env
+    from retarget.recipe import load
+
+    registry = retarget.load_plugins()
+    env = env_from_recipe(load(None, registry, shorthands={"sensors": "three_point"}),
+                          num_envs=2, registry=registry)  # fmt: skip
+    assert tracking_env(env, "test") is env and env.last_context is None
+    env.reset()
+    env.step(torch.zeros(2, env.action_dim))
+    assert env.last_context is not None and env.last_context.num_envs == 2

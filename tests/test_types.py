@@ -20,6 +20,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = sorted(p.parent for p in (ROOT / "examples").glob("third_party_*/src/*/__init__.py"))
+"""The example third-party packages: checked as a package outside retarget would be."""
 
 
 def _python_only(folder: str, names: list[str]) -> set[str]:
@@ -30,6 +32,8 @@ def _laid_out(tmp: Path) -> Path:
     tree = tmp / "tree"
     shutil.copytree(ROOT / "core", tree / "retarget", ignore=_python_only)
     shutil.copytree(ROOT / "plugins", tree / "retarget" / "plugins", ignore=_python_only)
+    for package in EXAMPLES:
+        shutil.copytree(package, tree / package.name, ignore=_python_only)
     return tree
 
 
@@ -45,6 +49,9 @@ def _installed_path(repo_path: str) -> str:
 
 
 def _repo_path(line: str) -> str:
+    for package in EXAMPLES:
+        if line.startswith(package.name + "/"):
+            return str(package.relative_to(ROOT)) + line[len(package.name):]
     if line.startswith("retarget/plugins/"):
         return line[len("retarget/"):]
     if line.startswith("retarget/"):
@@ -79,7 +86,8 @@ def test_mypy_on_the_installed_layout(tmp_path: Path) -> None:
     pytest.importorskip("mypy")
     config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["mypy"]
     tree = _laid_out(tmp_path)
-    run = _mypy(tree, [_installed_path(f) for f in config["files"]])
+    files = [_installed_path(f) for f in config["files"]] + [p.name for p in EXAMPLES]
+    run = _mypy(tree, files)
     report = "\n".join(_repo_path(line) for line in run.stdout.splitlines())
     assert run.returncode == 0, report + run.stderr
 

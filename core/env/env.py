@@ -133,6 +133,8 @@ class RetargetEnv:
         self.episode_step = torch.zeros(n, dtype=torch.long)
         self.episode_return = torch.zeros(n)
         self.prev_action = torch.zeros(n, layout.nu)
+        self.last_context: StepContext | None = None
+        """The last step's state before its resets (evaluation reads it); None before one."""
         self.nan_resets = 0
         self.nan_actions = 0  # actions with NaN/inf (those environments end as failures)
         self.total_steps = 0  # environment steps taken (num_envs per call of step)

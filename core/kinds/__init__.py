@@ -14,6 +14,7 @@ from retarget.kinds.scene import Scene
 from retarget.kinds.sensor import Observer, ObsSpec, RecordedStream, Sensor
 from retarget.kinds.step import StepNeeds, StepPlugin
 from retarget.kinds.termination import Termination
+from retarget.kinds.tracking_env import TrackingEnv
 
 KINDS: dict[str, type[Plugin]] = {
     "character": Character,
@@ -52,6 +53,7 @@ __all__ = [
     "StepNeeds",
     "StepPlugin",
     "Termination",
+    "TrackingEnv",
     "VecEnv",
     "gaussian_kernel",
 ]

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from retarget.kinds.tracking_env import TrackingEnv
 from retarget.learn.config import DaggerConfig
 from retarget.learn.dagger import DaggerLearner
 
@@ -123,7 +124,7 @@ class ExpertBCLearner(DaggerLearner):
         self.window[ids] = drawn["actions"]
         self.at[ids] = 0
         self.steps[ids] = drawn["steps"]
-        if not hasattr(env, "place_state"):  # a plain VecEnv: stepped from where it is
+        if not isinstance(env, TrackingEnv):  # a plain VecEnv: stepped from where it is
             return
         env.place_state(torch.from_numpy(ids), torch.from_numpy(drawn["clip"]),
                         torch.from_numpy(drawn["frame"]), drawn["qpos"], drawn["qvel"],
@@ -140,7 +141,7 @@ class ExpertBCLearner(DaggerLearner):
             stale = np.flatnonzero(self.at >= self.steps)
             if stale.size:
                 self._place(env, stale)
-            if hasattr(env, "observe_now"):
+            if isinstance(env, TrackingEnv):
                 obs = env.observe_now([key])[key].float()
             else:
                 if self.last_obs is None:

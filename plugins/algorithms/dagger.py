@@ -90,7 +90,6 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
         from retarget.recipe import parse_text
         from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
         c = self.config
-        assert isinstance(c, DaggerConfig)
         run = resolve_run(c.teacher)
         lock_file = run / LOCK
         try:

@@ -20,6 +20,7 @@ from pydantic import Field
 
 import retarget
 from retarget import Algorithm, IterationResult, PluginConfig, PluginError, VecEnv
+from retarget.kinds.tracking_env import tracking_env
 
 if TYPE_CHECKING:
     import torch
@@ -100,17 +101,12 @@ class Estimator(Algorithm[EstimatorConfig]):
 
         from retarget.learn.estimator import EstimatorLearner, EstimatorSettings
 
-        for attr in ("library", "reference", "sensors", "window_offsets", "layout"):
-            if not hasattr(env, attr):
-                raise PluginError(
-                    f"needs a retarget environment (its motion library and sensors); this one "
-                    f"has no '{attr}'", plugin=self.name,
-                )  # fmt: skip
-        sensors = list(env.sensors)  # type: ignore[attr-defined]
+        env = tracking_env(env, self.name)
+        sensors = list(env.sensors)
         if not sensors:
             raise PluginError("needs at least one sensor (hmd or three_point)", plugin=self.name)
         for s in sensors:
-            if getattr(s, "recorded", None) is not None:
+            if s.recorded is not None:
                 raise PluginError(
                     f"reads device poses; sensor '{s.name}' gives recorded images",
                     plugin=self.name, hint="use --sensors hmd or three_point",

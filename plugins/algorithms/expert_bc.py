@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import retarget
 from retarget import IterationResult, PluginError, RecipeError, VecEnv
+from retarget.kinds.tracking_env import tracking_env
 from retarget.learn.config import ExpertBCConfig
 from retarget.learn.delegating import LearnerAlgorithm
 from retarget.settings.sim import ACTION_PHYSICS
@@ -62,7 +63,6 @@ class ExpertBC(LearnerAlgorithm[ExpertBCConfig]):
     def prepare_recipe(self, recipe: dict[str, Any], registry: Any) -> dict[str, Any]:
         from retarget.expert.store import read_header
         c = self.config
-        assert isinstance(c, ExpertBCConfig)
         root = Path(c.expert).resolve()
         header = read_header(root)
         theirs = header["recipe"]
@@ -94,7 +94,6 @@ class ExpertBC(LearnerAlgorithm[ExpertBCConfig]):
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
         from retarget.learn.expert_bc import ExpertBCLearner
         c = self.config
-        assert isinstance(c, ExpertBCConfig)
         if self._windows is not None:
             self.learner = ExpertBCLearner(c.dagger(), env.obs_dims, env.action_dim,
                                            env.num_envs, self._windows(env.action_dim),
@@ -114,12 +113,9 @@ class ExpertBC(LearnerAlgorithm[ExpertBCConfig]):
         from retarget.expert.store import load_track
         from retarget.learn.expert_bc import ExpertWindows
         c = self.config
-        assert isinstance(c, ExpertBCConfig)
-        if not hasattr(env, "place_state") or not hasattr(env, "library"):
-            raise PluginError("needs a retarget environment (place_state, library)",
-                              plugin=self.name)
+        env = tracking_env(env, self.name)
         root = Path(c.expert)
-        sim = env.sim  # type: ignore[attr-defined]
+        sim = env.sim
         shapes = {k: tuple(sim.raw(k).shape[1:]) for k in sim.STATE_FIELDS}
         nq, nv = shapes["qpos"][0], shapes["qvel"][0]
         lib, ref = env.library, env.reference  # type: ignore[attr-defined]

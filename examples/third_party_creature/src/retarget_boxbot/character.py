@@ -36,7 +36,6 @@ class Boxbot(retarget.Character[BoxbotConfig]):
 
     def build_spec(self):
         c = self.config
-        assert isinstance(c, BoxbotConfig)
         t = c.max_torque
         b = BodyBuilder("boxbot", rgba=(0.55, 0.6, 0.65, 1.0))
         b.root("pelvis", (0, 0, 0.8), [Box((0, 0, 0), (0.1, 0.14, 0.06))])
