@@ -45,6 +45,7 @@ from retarget.kinds.step import StepNeeds, StepPlugin
 from retarget.motion.clip import MotionClip
 from retarget.motion.library import MotionLibrary
 from retarget.motion.resample import resample
+from retarget.scene.ground import Ground
 from retarget.settings.env import EnvOptions
 from retarget.sim import SimSettings, make_sim
 from retarget.sim.world import build_world
@@ -70,9 +71,12 @@ class RetargetEnv:
         self.options = opts = options or EnvOptions()
         sim = sim or SimSettings()
         self.num_envs = n = opts.num_envs
+        if scene is None:  # the floor alone: every environment has a scene
+            scene = Ground()
         self.character, self.scene = character, scene
-        if scene is not None:  # props placed from the motions come before the build, at the
-            # character's scale (its reference root path is scaled by the same ratio)
+        if type(scene).fit_motion is not Scene.fit_motion:  # props placed from the motions
+            # come before the build, at the character's scale (its reference root path is
+            # scaled by the same ratio); scaling every clip is skipped for scenes that do not
             rest = character.build_spec().compile()
             scene.fit_motion([scaled_clip(c, root_height_ratio(rest, c)) for c in clips])
         self.world = build_world(character, scene)
@@ -156,7 +160,7 @@ class RetargetEnv:
 
     def _clip_placements(self, count: int) -> list[tuple[np.ndarray, np.ndarray] | None] | None:
         """Every mocap body's pose per clip where the scene places its props per clip."""
-        if self.scene is None or not self._mocap_ids.size:
+        if not self._mocap_ids.size:
             return None
         model = self.world.model
         data = mujoco.MjData(model)
@@ -175,8 +179,6 @@ class RetargetEnv:
         """Indices into ``mocap_pos`` of the scene's props, resolved once; sizes the scene's
         per-environment placement state."""
         scene, model = self.scene, self.world.model
-        if scene is None:
-            return np.zeros(0, dtype=np.intp)
         scene.allocate(self.num_envs)
         ids = []
         for body in scene.mocap_bodies():
@@ -268,21 +270,19 @@ class RetargetEnv:
         qpos = self.reference.qpos64[rows].copy()
         qpos[:, 2] += self.options.reset_lift
         mocap = None
-        if self.scene is not None:  # a new episode gets new prop placements (Sec. 3.4)
-            seconds = frame.double() * self.sim.settings.control_dt
-            self.scene.start_episodes(env_ids, clip, seconds)
-            self.scene.randomize(env_ids, self.generator)
-            if self._mocap_ids.size:
-                pos, quat = self.scene.mocap_poses(env_ids)
-                mocap = (self._mocap_ids, pos.numpy(), quat.numpy())
+        # a new episode gets new prop placements (Sec. 3.4)
+        seconds = frame.double() * self.sim.settings.control_dt
+        self.scene.start_episodes(env_ids, clip, seconds)
+        self.scene.randomize(env_ids, self.generator)
+        if self._mocap_ids.size:
+            pos, quat = self.scene.mocap_poses(env_ids)
+            mocap = (self._mocap_ids, pos.numpy(), quat.numpy())
         self.sim.reset(env_ids.numpy(), qpos, self.reference.qvel64[rows], mocap)
         self.episode_step[env_ids] = 0
         self.episode_return[env_ids] = 0.0
         self.prev_action[env_ids] = 0.0
-        self.rewards.reset(env_ids)
-        self.terminations.reset(env_ids)
-        for plugin in (*self.sensors, *self.observers):
-            plugin.reset(env_ids)
+        for manager in (self.rewards, self.terminations, self.observations):
+            manager.reset(env_ids)
 
     def place(self, clip: torch.Tensor, frame: torch.Tensor) -> dict[str, torch.Tensor]:
         """Start every environment at the given reference (clip, frame): evaluation uses this
@@ -433,7 +433,7 @@ class RetargetEnv:
             "nan_actions": self.nan_actions,
             "total_steps": self.total_steps,
             "curriculum": self.curriculum.state_dict() if self.curriculum is not None else {},
-            "scene": self.scene.state_dict() if self.scene is not None else {},
+            "scene": self.scene.state_dict(),
         }
 
     def load_state_dict(self, state: Mapping) -> dict[str, torch.Tensor]:
@@ -455,7 +455,7 @@ class RetargetEnv:
         self.total_steps = int(state["total_steps"])
         if state.get("curriculum") and self.curriculum is not None:
             self.curriculum.load_state_dict(state["curriculum"])
-        if state.get("scene") and self.scene is not None:
+        if state.get("scene"):
             self.scene.load_state_dict(state["scene"])
         return self.observe(self._context(self.prev_action))
 

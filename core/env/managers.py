@@ -106,5 +106,6 @@ class TerminationManager:
         return failed, timed_out & ~failed
 
     def reset(self, env_ids: torch.Tensor) -> None:
+        """New episodes in ``env_ids``: every term forgets them."""
         for term in self.terms.values():
             term.reset(env_ids)

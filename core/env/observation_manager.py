@@ -35,6 +35,10 @@ class ObsSource(Protocol):
 
     def compute(self, ctx: StepContext) -> torch.Tensor: ...
 
+    def reset(self, env_ids: torch.Tensor) -> None:
+        """New episodes in ``env_ids``: forget what the source held for them."""
+        ...
+
 
 @dataclass
 class PluginSource:
@@ -55,6 +59,9 @@ class PluginSource:
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
         return self.plugin.observe(ctx)
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        self.plugin.reset(env_ids)
 
 
 class ObservationManager:
@@ -77,6 +84,11 @@ class ObservationManager:
         self.needs = StepNeeds()
         for name in used:
             self.needs = self.needs | self.sources[name].needs()
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        """New episodes in ``env_ids``: every source (sensor, observer, built-in) resets them."""
+        for source in self.sources.values():
+            source.reset(env_ids)
 
     @property
     def dims(self) -> dict[str, int]:

@@ -96,6 +96,9 @@ class Proprio:
     def needs(self) -> StepNeeds:
         return StepNeeds()
 
+    def reset(self, env_ids: torch.Tensor) -> None:
+        """Stateless: computed from each step's state alone."""
+
     def compute(self, ctx: StepContext) -> torch.Tensor:
         return proprio(ctx)
 
@@ -119,6 +122,9 @@ class Privileged:
 
     def needs(self) -> StepNeeds:
         return StepNeeds(reference_offsets=self.offsets)
+
+    def reset(self, env_ids: torch.Tensor) -> None:
+        """Stateless: computed from each step's state alone."""
 
     def compute(self, ctx: StepContext) -> torch.Tensor:
         return privileged(ctx, self.offsets)

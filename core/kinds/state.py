@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     import torch
@@ -161,7 +161,9 @@ class StepContext:
     prev_action: torch.Tensor  # (N, nu)
     episode_step: torch.Tensor  # (N,) int64
     dt: float
-    scene: Scene | None = None  # the Scene plugin, for observers' batched geometry queries
+    scene: Scene[Any]
+    """The scene plugin, for observers' batched geometry queries: every environment has one
+    (the floor alone, :class:`retarget.scene.ground.Ground`, when the recipe names none)."""
     terminated: torch.Tensor | None = None
     """``(N,)`` bool: environments whose episode failed this step (time-outs excluded). Set
     for rewards, which run after terminations; None for terminations and observations."""
@@ -172,10 +174,9 @@ class StepContext:
 
     def select(self, idx: torch.Tensor) -> StepContext:
         """The same step restricted to environments ``idx`` (used to check batch invariance)."""
-        scene = self.scene.select(idx) if self.scene is not None else None
         return replace(
             self,
-            scene=scene,
+            scene=self.scene.select(idx),
             sim=self.sim.select(idx),
             ref=self.ref.select(idx),
             action=self.action[idx],

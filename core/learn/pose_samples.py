@@ -175,7 +175,8 @@ def sensor_inputs(
     b, nu = rows.shape[0], len(env.layout.actuator_names)
     zeros = torch.zeros(b, nu)
     ctx = StepContext(layout=env.layout, sim=sim, ref=ref, action=zeros, prev_action=zeros,
-                      episode_step=torch.zeros(b, dtype=torch.long), dt=1.0 / lib.fps)  # fmt: skip
+                      episode_step=torch.zeros(b, dtype=torch.long), dt=1.0 / lib.fps,
+                      scene=env.scene)  # fmt: skip
     sensors: list[Sensor] = list(env.sensors)
     parts = [s.observe(ctx).reshape(b, -1).float() for s in sensors]
     if env.observers:  # the scene around the user, each sample with its own clip's props
@@ -188,8 +189,6 @@ def _scene_for(scene, clip: torch.Tensor, frame: torch.Tensor, fps: float):
     """The env's scene holding one placement per sample: where each sample's clip puts its
     props (per-clip props, boxes on a path), with the scene's usual noise from a fixed seed.
     The estimator never steps the env, so its scene's placement state is free to use."""
-    if scene is None:
-        return None
     ids = torch.arange(clip.shape[0])
     scene.allocate(int(clip.shape[0]))
     scene.start_episodes(ids, clip, frame.double() / fps)

@@ -14,7 +14,7 @@ import numpy as np
 from retarget.errors import PluginError
 from retarget.kinds import REQUIRED_GROUPS, REQUIRED_SITES, Character, Scene
 from retarget.kinds.state import Layout
-from retarget.scene.floor import add_floor
+from retarget.scene.ground import Ground
 from retarget.sim.batched import add_contact_force_sensor
 
 
@@ -36,12 +36,11 @@ def build_world(character: Character, scene: Scene | None = None) -> World:
     spec = character.build_spec()
     body_names = tuple(b.name for b in spec.bodies if b.name and b.name != "world")
     if scene is None:
-        add_floor(spec)
-    else:
-        try:
-            scene.build(spec)
-        except Exception as exc:
-            raise PluginError(f"build failed: {exc}", plugin=f"scene {scene.name}") from exc
+        scene = Ground()
+    try:
+        scene.build(spec)
+    except Exception as exc:
+        raise PluginError(f"build failed: {exc}", plugin=f"scene {scene.name}") from exc
     root_site = dict(character.site_roles()).get("root")
     if root_site is not None:
         add_contact_force_sensor(spec, root_site)

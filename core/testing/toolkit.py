@@ -25,6 +25,7 @@ TOOLKIT: dict[str, str] = {
     "retarget.geometry.rotations": "numpy quaternions for motion data",
     "retarget.scene.props": "the prop-scene base class (boxes, chairs, couches, ...)",
     "retarget.scene.floor": "the ground plane",
+    "retarget.scene.ground": "the floor-only scene every environment has without another",
     "retarget.scene.mesh_boxes": "upright boxes read from a mesh file",
     "retarget.scene.contacts": "the links and force threshold of scene-contact labels",
     "retarget.motion.clip": "MotionClip, what motion formats read and write",

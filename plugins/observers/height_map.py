@@ -70,10 +70,6 @@ class HeightMap(Observer[HeightMapConfig]):
         return torch.stack([x, y], dim=-1)
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
-        import torch
-        n = ctx.num_envs
-        if ctx.scene is None:
-            return torch.zeros(n, self.grid.shape[0])
         h = ctx.scene.height_at(self.points(ctx)).float()
         if self.config.relative == "ground":
             h = h - ctx.scene.height_at(ctx.sim.qpos[:, None, :2]).float()

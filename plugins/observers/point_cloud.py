@@ -175,8 +175,6 @@ class PointCloud(Observer[PointCloudConfig]):
         from retarget.geometry.heading import heading_cos_sin, unyaw
         n, k, size = ctx.num_envs, self.config.count, self.config.chunk
         out = torch.zeros(n, k, 4)
-        if ctx.scene is None:
-            return out
         pool, rank, lo, hi = self._refresh(ctx.scene, n).parts()
         root = ctx.sim.qpos[:, :3].float()
         r2 = self.config.radius**2

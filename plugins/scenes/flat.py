@@ -1,28 +1,18 @@
-"""``flat``: the floor alone (z = 0), the scene every other scene is built on."""
+"""``flat``: the floor alone (z = 0), the scene every other scene is built on.
+
+The same floor every environment has when its recipe names no scene
+(:class:`retarget.scene.ground.Ground`), under the name recipes use.
+"""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
-from pydantic import Field
-
 import retarget
-from retarget.kinds import PluginConfig, Scene
-from retarget.scene.floor import add_floor
+from retarget.scene.ground import Ground, GroundConfig
 
-if TYPE_CHECKING:
-    import mujoco
-    import numpy as np
-    import torch
+FlatConfig = GroundConfig
 
 
-class FlatConfig(PluginConfig):
-    extent: float = Field(
-        2.0, gt=0, description="half side (m) of the square around the origin surface points fill"
-    )
-
-
-class Flat(Scene[FlatConfig]):
+class Flat(Ground):
     """An infinite flat floor at z = 0; nothing to randomize.
 
     The floor has no props, so its surface points are drawn on the floor inside a square of
@@ -30,27 +20,6 @@ class Flat(Scene[FlatConfig]):
     """
 
     name = "flat"
-
-    def __init__(self, config: PluginConfig | None = None) -> None:
-        super().__init__(config)
-        self._num_envs = 1
-
-    def build(self, spec: mujoco.MjSpec) -> None:
-        add_floor(spec)
-
-    def allocate(self, num_envs: int) -> None:
-        self._num_envs = num_envs
-
-    def height_at(self, xy: torch.Tensor) -> torch.Tensor:
-        import torch
-        return torch.zeros(xy.shape[:-1], dtype=torch.float32)
-
-    def surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
-        import numpy as np
-        e = self.config.extent
-        pts = np.zeros((count, 3))
-        pts[:, :2] = rng.uniform(-e, e, size=(count, 2))
-        return np.broadcast_to(pts, (self._num_envs, count, 3)).copy()
 
 
 @retarget.hookimpl

@@ -47,13 +47,8 @@ class Fall(Termination[FallConfig]):
         self._bodies = torch.tensor(layout.group("upper_body"), dtype=torch.long)
 
     def check(self, ctx: StepContext) -> torch.Tensor:
-        import torch
         pos = ctx.sim.body_pos[:, self._bodies]  # (N, K, 3)
-        ground = (
-            ctx.scene.height_at(pos[..., :2])
-            if ctx.scene is not None
-            else torch.zeros_like(pos[..., 2])
-        )
+        ground = ctx.scene.height_at(pos[..., :2])
         low = (pos[..., 2] - ground) < self.config.height_threshold
         touching = ctx.sim.contact_force[:, self._bodies] > self.config.force_threshold
         return (low & touching).any(dim=-1)

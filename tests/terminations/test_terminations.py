@@ -10,6 +10,7 @@ import torch
 from retarget.plugins.terminations.episode_cap import EpisodeCap
 from retarget.plugins.terminations.fall import Fall
 from retarget.plugins.terminations.root_distance import RootDistance
+from retarget.scene.ground import Ground
 from retarget.testing import FlatScene, fake_context, tiny_world
 
 LAYOUT = tiny_world().layout
@@ -68,7 +69,7 @@ def test_fall_measures_height_above_the_scene_ground() -> None:
     ctx = _set(ctx, 1, TORSO, 0.1, 20.0)
     assert _check(Fall(), ctx).tolist() == [False, True]
     assert _check(Fall(), replace(ctx, scene=RaisedFloor())).tolist() == [True, True]
-    assert _check(Fall(), replace(ctx, scene=None)).tolist() == [False, True]
+    assert _check(Fall(), replace(ctx, scene=Ground())).tolist() == [False, True]
 
 
 def test_root_distance_threshold() -> None:
