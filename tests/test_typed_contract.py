@@ -126,3 +126,42 @@ def test_the_retarget_env_is_a_tracking_env() -> None:
     env.reset()
     env.step(torch.zeros(2, env.action_dim))
     assert env.last_context is not None and env.last_context.num_envs == 2
+
+
+def test_built_in_algorithms_have_the_capabilities_they_define() -> None:
+    from retarget.kinds.capabilities import capabilities
+
+    registry = retarget.load_plugins()
+    got = {n: capabilities(registry.get("algorithm", n).cls)
+           for n in ("ppo", "dagger", "estimator", "expert_bc")}  # fmt: skip
+    assert got == {
+        "ppo": ["acting", "exportable", "warm_startable", "data_parallel"],
+        "dagger": ["acting", "exportable", "data_parallel"],
+        "estimator": ["exportable", "pose_estimating"],
+        "expert_bc": ["acting", "exportable"],
+    }
+
+
+def test_require_names_the_algorithm_and_what_it_lacks() -> None:
+    from retarget.kinds.capabilities import Acting, WarmStartable, require
+    from retarget.plugins.algorithms.estimator import Estimator
+    from retarget.plugins.algorithms.ppo import PPO
+
+    ppo = PPO()
+    assert require(ppo, WarmStartable) is ppo
+    with pytest.raises(retarget.PluginError, match="algorithm estimator.*drives no character"):
+        require(Estimator(), Acting, hint="eval it instead")
+
+
+def test_an_algorithm_that_neither_acts_nor_estimates_fails_the_kit() -> None:
+    import contract_doubles as d
+
+    class Mute(d.GoodAlgorithm):
+        """Trains, but there is nothing to evaluate or deploy."""
+
+        name = "mute"
+        act = None  # type: ignore[assignment]
+
+    checks.check_algorithm_update(d.GoodAlgorithm)
+    with pytest.raises(AssertionError, match="acts .* or estimates poses"):
+        checks.check_algorithm_update(Mute)

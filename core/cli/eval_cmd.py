@@ -11,6 +11,7 @@ from retarget.cli.run_changes import add_run_change_args
 from retarget.commands.numbers import amount, count
 from retarget.commands.recipe_args import add_pick_flags, patterns
 from retarget.errors import RetargetError
+from retarget.kinds.capabilities import Acting, PoseEstimating, require
 from retarget.registry import Registry
 
 if TYPE_CHECKING:
@@ -45,6 +46,11 @@ LABEL = 16
 """Widest clip label in the table; longer names are shortened (the JSON keeps them whole)."""
 WINDOWS = {"success_20s": 20.0, "success_30s": 30.0}
 
+
+
+def _no_actions(obs: object) -> object:
+    """The policy of a kinematic method, never called: its character is placed, not stepped."""
+    raise RuntimeError("a pose estimator is evaluated by placing the character, not by acting")
 
 def short_label(name: str, width: int = LABEL) -> str:
     """``name`` cut to ``width`` characters, keeping its end (clip files differ at the end)."""
@@ -190,10 +196,9 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             raise RetargetError("--estimator needs --motions: the clips both runs read")
         source = load_run(args.estimator, registry, num_envs=1, motions=motions,
                           include=patterns(args.include), exclude=patterns(args.exclude))
-        estimator = source.algorithm.pose_estimator()
-        if estimator is None:
+        if not isinstance(source.algorithm, PoseEstimating):
             raise RetargetError(f"--estimator {args.estimator} is not a pose estimator run")
-        loaded = build(estimate_library(source.env, estimator).clips)
+        loaded = build(estimate_library(source.env, source.algorithm.pose_estimator()).clips)
         truth = GroundTruth(truth_run.env, loaded.env)
     else:
         loaded = build()
@@ -215,13 +220,17 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         def progress(done: int, total: int, clips_done: int, clips: int) -> None:
             bar.update(task, completed=done, total=total, clips=f"{clips_done}/{clips} clips")
 
-        estimator = loaded.algorithm.pose_estimator()
+        algorithm = loaded.algorithm
         kinematic = None
-        if estimator is not None:  # a kinematic method: the character placed in its estimate
+        if isinstance(algorithm, PoseEstimating):  # the character placed in its estimate
             from retarget.eval.kinematic import KinematicRollout, estimate_library
 
-            kinematic = KinematicRollout(loaded.env, estimate_library(loaded.env, estimator))
-        report = evaluate(loaded.env, loaded.algorithm.act, settings, progress, fall=fall,
+            estimates = estimate_library(loaded.env, algorithm.pose_estimator())
+            kinematic = KinematicRollout(loaded.env, estimates)
+            policy = _no_actions
+        else:
+            policy = require(algorithm, Acting).act
+        report = evaluate(loaded.env, policy, settings, progress, fall=fall,
                           kinematic=kinematic, truth=truth)  # fmt: skip
         if truth is not None:
             report["method"] = f"two-stage (estimator {args.estimator})"

@@ -9,12 +9,15 @@ from typing import TYPE_CHECKING
 from retarget.cli.run_changes import add_run_change_args
 from retarget.commands.numbers import amount, count, image_size
 from retarget.errors import RetargetError, require_extra
+from retarget.kinds.capabilities import Acting, Exportable, require
 from retarget.registry import Registry
 from retarget.train.run_dir import resolve_run
 
 if TYPE_CHECKING:
     from retarget.motion.device_recording import DeviceRecording
 
+
+PLAYS = "play shows a policy driving physics; `retarget eval RUN` measures a pose estimator"
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     parser = sub.add_parser("play", help="render a trained policy (several runs side by side)")
@@ -154,7 +157,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         if not 0 <= args.clip < env.library.num_clips:
             raise RetargetError(f"--clip {args.clip}: the motions hold {env.library.num_clips}")
         start = round(args.start * env.sim.settings.control_hz)
-        group = loaded.algorithm.policy()[0] if args.cameras else "actor"
+        group = require(loaded.algorithm, Exportable).policy()[0] if args.cameras else "actor"
         images = image_inputs(env, group) if args.cameras else ()
         if args.cameras and not images:
             raise RetargetError(
@@ -164,7 +167,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         observed: list[np.ndarray] = []
         frames = render_rollout(
             env,
-            loaded.algorithm.act,
+            require(loaded.algorithm, Acting, hint=PLAYS).act,
             args.clip,
             start=start,
             seconds=args.seconds,

@@ -64,6 +64,10 @@ def run_show(args: argparse.Namespace, registry: Registry) -> int:
     out.print(escape(doc))
     if entry.cls.requires:
         out.print(f"requires: {', '.join(entry.cls.requires)}")
+    if entry.kind == "algorithm":
+        from retarget.kinds.capabilities import capabilities
+
+        out.print(f"capabilities: {', '.join(capabilities(entry.cls)) or '(none)'}")
     fields = cls.Config.model_fields
     if not fields:
         out.print("config: (no fields)")

@@ -19,6 +19,7 @@ import torch
 
 from retarget.errors import RetargetError
 from retarget.kinds import Algorithm
+from retarget.kinds.capabilities import Exportable
 
 OPSET = 17
 
@@ -33,10 +34,10 @@ class ExportedPolicy:
 
 def policy_of(algorithm: Algorithm) -> tuple[str, torch.nn.Module]:
     """The algorithm's deployable ``(group, module)``; a user error if it has none."""
-    try:
-        return algorithm.policy()
-    except NotImplementedError as exc:
-        raise RetargetError(str(exc), plugin=algorithm.name) from None
+    if not isinstance(algorithm, Exportable):
+        raise RetargetError(f"algorithm '{algorithm.name}' does not provide an exportable policy",
+                            plugin=algorithm.name)  # fmt: skip
+    return algorithm.policy()
 
 
 def export_onnx(

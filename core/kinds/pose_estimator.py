@@ -1,9 +1,9 @@
 """What a kinematic method hands ``retarget eval``: the pose-estimator protocol.
 
 An algorithm that outputs a body instead of actions returns one of these from
-``Algorithm.pose_estimator()``; the evaluator places the character in its estimate
-(:mod:`retarget.eval.kinematic`). It lives with the plugin kinds because it is part of the
-algorithm contract, so the contract knows nothing of the evaluator built on it.
+``pose_estimator()`` (the ``PoseEstimating`` capability); the evaluator places the character
+in its estimate (:mod:`retarget.eval.kinematic`). It lives with the plugin kinds because it
+is part of the algorithm contract, so the contract knows nothing of the evaluator built on it.
 """
 
 from __future__ import annotations

@@ -18,6 +18,7 @@ import numpy as np
 import torch
 
 from retarget.errors import RetargetError
+from retarget.kinds.capabilities import Acting, Exportable, require
 from retarget.live.calibration import Calibration
 from retarget.motion.device_recording import convert
 from retarget.motion.device_stream import align_to
@@ -39,7 +40,8 @@ class LiveSession:
 
     def __init__(self, loaded) -> None:
         env = loaded.env
-        group = loaded.algorithm.policy()[0]
+        group = require(loaded.algorithm, Exportable, hint="serve drives a character with a "
+                        "policy").policy()[0]  # fmt: skip
         reads = {name for name, _ in env.obs_shapes.get(group, ())}
         for sensor in (s for s in env.sensors if s.name in reads):
             if sensor.needs().reference_offsets or sensor.name in ("full_body", "reference_action"):
@@ -55,7 +57,8 @@ class LiveSession:
         self.image_sensors = [s for s in env.sensors if s.name in reads and s.recorded]
         if env.num_envs != 1:
             raise RetargetError("a live session drives one environment")
-        self.env, self.act, self.group = env, loaded.algorithm.act, group
+        acting = require(loaded.algorithm, Acting, hint="serve drives a character with a policy")
+        self.env, self.act, self.group = env, acting.act, group
         lib = env.library
         self.offsets = np.asarray(env.window_offsets)
         if self.offsets.max() > 0:

@@ -17,6 +17,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from retarget.kinds.capabilities import Acting, require
 from retarget.render.browser_scene import BrowserScene, draw_ghost
 
 
@@ -60,9 +61,10 @@ def run_track(path: str, loaded, seconds: float) -> Track:
     steps = int(min(seconds * env.sim.settings.control_hz, int(lib.length[0]) - 2))
     obs = env.place(torch.zeros(1, dtype=torch.long), torch.zeros(1, dtype=torch.long))
     qpos, mpos, mquat, joints, devices = [], [], [], [], []
+    act = require(loaded.algorithm, Acting, hint="view shows a policy driving physics").act
     with torch.no_grad():
         for _ in range(max(steps, 1)):
-            obs, *_ = env.step(loaded.algorithm.act(obs))
+            obs, *_ = env.step(act(obs))
             row = int(lib.rows(env.clip[:1], env.frame[:1])[0, 0])
             qpos.append(env.sim.raw("qpos")[0].copy())
             mpos.append(env.sim.raw("mocap_pos")[0].copy())

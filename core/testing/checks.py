@@ -25,6 +25,7 @@ from pydantic import ValidationError
 from retarget.errors import MotionError
 from retarget.kinds import KINDS, Plugin, PluginConfig
 from retarget.kinds.base import NAME_RE
+from retarget.kinds.capabilities import Acting, PoseEstimating
 from retarget.kinds.iteration import IterationResult, as_result
 from retarget.kinds.step import StepNeeds
 from retarget.motion.clip import MotionClip
@@ -484,7 +485,12 @@ def _iteration(value: object) -> IterationResult:
 
 
 def check_algorithm_update(plugin: object) -> None:
-    if plugin_class(plugin).kinematic:
+    cls = plugin_class(plugin)
+    assert issubclass(cls, Acting) or issubclass(cls, PoseEstimating), (
+        "an algorithm acts (act(obs)) or estimates poses (pose_estimator()): retarget can "
+        "neither evaluate nor deploy one that does neither"
+    )
+    if issubclass(cls, PoseEstimating):
         env = kinematic_env()
         algo = make(plugin)
         algo.setup(env, torch.Generator().manual_seed(0))
@@ -508,7 +514,7 @@ def check_algorithm_update(plugin: object) -> None:
 
 
 def check_algorithm_checkpoint(plugin: object) -> None:
-    kinematic = plugin_class(plugin).kinematic
+    kinematic = issubclass(plugin_class(plugin), PoseEstimating)
     env = kinematic_env() if kinematic else FakeVecEnv(num_envs=4, seed=1)
     algo = make(plugin)
     algo.setup(env, torch.Generator().manual_seed(0))

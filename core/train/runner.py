@@ -31,6 +31,7 @@ import torch
 from retarget.env.build import env_from_recipe
 from retarget.errors import RecipeError, SimulationError
 from retarget.kinds import Algorithm, Callback
+from retarget.kinds.capabilities import DataParallel, require
 from retarget.kinds.iteration import RL_HEADLINE, IterationResult, as_result
 from retarget.recipe import ResolvedRecipe, write_lock
 from retarget.registry import Registry
@@ -113,7 +114,7 @@ class Trainer:
         self.resolved, self.run, self.comm = resolved, run, comm
         algorithm = resolved.component("algorithm").instantiate()
         assert isinstance(algorithm, Algorithm)
-        if comm.distributed and not algorithm.distributed:
+        if comm.distributed and not isinstance(algorithm, DataParallel):
             raise RecipeError(
                 f"algorithm '{algorithm.name}' does not train data-parallel",
                 file=resolved.source.path,
@@ -213,7 +214,9 @@ class Trainer:
         if own is None:
             self.algorithm.load_state_dict(state["algorithm"])
             rank_seed = self.resolved.recipe.seed + rank
-            self.algorithm.fresh_rank(torch.Generator().manual_seed(rank_seed))
+            require(self.algorithm, DataParallel).fresh_rank(
+                torch.Generator().manual_seed(rank_seed)
+            )
             return
         self.algorithm.load_state_dict(own["algorithm"])
         self.env.load_state_dict(own["env"])

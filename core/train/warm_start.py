@@ -16,6 +16,7 @@ import torch
 
 from retarget.errors import RecipeError
 from retarget.kinds import Algorithm
+from retarget.kinds.capabilities import WarmStartable, require
 from retarget.registry import Registry
 from retarget.train.load import load_run
 from retarget.train.run_dir import LOCK
@@ -88,8 +89,9 @@ def warm_start(
             file=str(old.checkpoint),
             hint="--init-from needs at least one sensor in common",
         )
+    starts = require(algorithm, WarmStartable, hint="train from scratch (drop --init-from)")
     try:
-        algorithm.warm_start(old.algorithm.state_dict(), maps)
+        starts.warm_start(old.algorithm.state_dict(), maps)
     except (ValueError, KeyError) as exc:
         raise RecipeError(
             f"cannot start from {old.checkpoint}: {exc}",

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import retarget
 from retarget import IterationResult, PluginError, RecipeError, VecEnv
+from retarget.kinds.capabilities import Exportable
 from retarget.learn.config import DaggerConfig
 from retarget.learn.delegating import LearnerAlgorithm
 from retarget.settings.sim import ACTION_PHYSICS
@@ -55,7 +56,6 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
     """
 
     name = "dagger"
-    distributed = True
 
     def __init__(
         self,
@@ -200,6 +200,8 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
             run, self.registry, num_envs=1, clips=[idle_clip(1.0)],
             checkpoint=run / ckpt if ckpt else None,
         )
+        if not isinstance(teacher.algorithm, Exportable):
+            raise PluginError(f"the teacher run {run} has no policy to distil", plugin=self.name)
         group, policy = teacher.algorithm.policy()
         width = int(teacher.env.obs_dims[group])
         if width != self._teacher_dim:

@@ -67,7 +67,6 @@ class Estimator(Algorithm[EstimatorConfig]):
     """
 
     name = "estimator"
-    kinematic = True
 
     @classmethod
     def example(cls) -> Estimator:
@@ -130,12 +129,6 @@ class Estimator(Algorithm[EstimatorConfig]):
         stats = dict(self._ready().train_iteration())
         samples = int(stats.pop("samples"))  # rows of the library, no environment steps
         return IterationResult(stats=stats, samples=samples, headline=("loss", "mpjpe_mm"))
-
-    def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
-        raise PluginError(
-            "estimates the body; it has no actions to drive a character",
-            plugin=self.name, hint="`retarget eval RUN` measures it; `retarget export` writes it",
-        )  # fmt: skip
 
     def pose_estimator(self) -> EstimatorLearner:
         return self._ready()

@@ -26,7 +26,6 @@ class PPO(LearnerAlgorithm[PPOConfig]):
     """
 
     name = "ppo"
-    distributed = True
 
     def __init__(self, config: PPOConfig | None = None) -> None:
         super().__init__(config)

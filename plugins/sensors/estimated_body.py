@@ -19,6 +19,7 @@ from pydantic import Field
 
 import retarget
 from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
+from retarget.kinds.capabilities import Exportable, PoseEstimating
 
 if TYPE_CHECKING:
     import torch
@@ -82,7 +83,8 @@ class EstimatedBody(Sensor[EstimatedBodyConfig]):
                 hint="environments built from a recipe connect(registry) before bind",
             )
         loaded = load_run(run, self.registry, num_envs=1, clips=[idle_clip(2.0)])
-        if loaded.algorithm.pose_estimator() is None:
+        algorithm = loaded.algorithm
+        if not (isinstance(algorithm, PoseEstimating) and isinstance(algorithm, Exportable)):
             raise PluginError(f"{run} is not a pose estimator run", plugin=self.name)
         if loaded.env.observers:
             raise PluginError(f"{run} reads the scene (observers); as a sensor only "
@@ -90,7 +92,7 @@ class EstimatedBody(Sensor[EstimatedBodyConfig]):
         self._inner = list(loaded.env.sensors)
         for sensor in self._inner:
             sensor.bind(layout)
-        self._net = loaded.algorithm.policy()[1].eval()
+        self._net = algorithm.policy()[1].eval()
 
     def deployable(self) -> tuple[torch.nn.Module, int, dict[str, Any]]:
         if self._net is None:
