@@ -149,7 +149,7 @@ def test_require_names_the_algorithm_and_what_it_lacks() -> None:
 
     ppo = PPO()
     assert require(ppo, WarmStartable) is ppo
-    with pytest.raises(retarget.PluginError, match="algorithm estimator.*drives no character"):
+    with pytest.raises(retarget.PluginError, match=r"algorithm estimator.*drives no character"):
         require(Estimator(), Acting, hint="eval it instead")
 
 
@@ -163,5 +163,5 @@ def test_an_algorithm_that_neither_acts_nor_estimates_fails_the_kit() -> None:
         act = None  # type: ignore[assignment]
 
     checks.check_algorithm_update(d.GoodAlgorithm)
-    with pytest.raises(AssertionError, match="acts .* or estimates poses"):
+    with pytest.raises(AssertionError, match=r"acts .* or estimates poses"):
         checks.check_algorithm_update(Mute)
