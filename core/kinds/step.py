@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from retarget.kinds.base import ConfigT, Plugin
+from retarget.kinds.base import ConfigT, Plugin, PluginConfig
 
 if TYPE_CHECKING:
     import torch
@@ -51,6 +51,14 @@ class StepPlugin(Plugin[ConfigT]):
         ``self.registry``), so a plugin that builds other plugins (a sensor wrapping an
         estimator run) resolves them against the same set the recipe was resolved with."""
         self.registry = registry
+
+    def pinned_config(self, registry: PluginLookup) -> PluginConfig | None:
+        """The config a new run locks when this one names something that can move (another
+        run's ``latest`` checkpoint): fixed to what it is now, so the run's lock says exactly
+        what it read and a resume reads the same, as a student's lock names its teacher's
+        checkpoint. Errors about what it names are raised here, before anything is built.
+        Default: ``None`` (locked as configured)."""
+        return None
 
     def bind(self, layout: Layout) -> None:
         """Resolve names to indices once, before the first step."""

@@ -6,6 +6,7 @@ well under a second with the file, the dotted field path and the plugin named.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -60,11 +61,13 @@ class ResolvedRecipe:
     def character(self) -> Component:
         return self.components["character"]
 
-    def to_dict(self) -> dict[str, Any]:
-        """The recipe with every default filled in (what ``recipe show`` prints)."""
+    def to_dict(self, configs: Mapping[str, PluginConfig] | None = None) -> dict[str, Any]:
+        """The recipe with every default filled in (what ``recipe show`` prints); ``configs``
+        replaces the config of the components at those paths (``sensors.1``)."""
         data = self.recipe.model_dump(mode="json")
         for path, comp in self.components.items():
-            filled = {"type": comp.entry.name, **comp.config.model_dump(mode="json")}
+            config = (configs or {}).get(path, comp.config)
+            filled = {"type": comp.entry.name, **config.model_dump(mode="json")}
             _assign(data, path, filled)
         return data
 

@@ -14,6 +14,7 @@ from retarget.env.build import env_from_recipe
 from retarget.errors import RecipeError
 from retarget.kinds import Algorithm
 from retarget.kinds.lookup import PluginLookup
+from retarget.kinds.step import StepPlugin
 from retarget.motion.clip import MotionClip
 from retarget.recipe import ResolvedRecipe, apply_overrides, parse_text, resolve
 from retarget.recipe.source import LOCK_SECTION
@@ -45,16 +46,30 @@ def locked_recipe(
     return resolve(source, registry), lock
 
 
+STEP_KINDS = ("sensor", "observer", "reward", "termination")
+"""The plugin kinds whose components may pin their config when a run is locked."""
+
+
 def prepared_recipe(resolved: ResolvedRecipe, registry: PluginLookup) -> ResolvedRecipe:
-    """``resolved`` after its algorithm's :meth:`~retarget.kinds.Algorithm.prepare_recipe`
-    (e.g. a distillation run given its teacher's sensors), resolved again; unchanged when
-    the algorithm changes nothing."""
-    if "algorithm" not in resolved.components:
-        return resolved
-    algorithm = resolved.component("algorithm").instantiate()
-    assert isinstance(algorithm, Algorithm)
+    """``resolved`` as a new run locks it: every step plugin's
+    :meth:`~retarget.kinds.step.StepPlugin.pinned_config` (a sensor that names another run
+    fixes the checkpoint it reads), then the algorithm's
+    :meth:`~retarget.kinds.Algorithm.prepare_recipe` (a distillation run given its
+    teacher's sensors), resolved again; unchanged when nothing changes."""
+    pins = {}
+    for path, comp in resolved.components.items():
+        if comp.entry.kind in STEP_KINDS:
+            plugin = comp.instantiate()
+            assert isinstance(plugin, StepPlugin)
+            pinned = plugin.pinned_config(registry)
+            if pinned is not None:
+                pins[path] = pinned
     before = resolved.to_dict()
-    after = algorithm.prepare_recipe(copy.deepcopy(before), registry)
+    after = resolved.to_dict(pins)
+    if "algorithm" in resolved.components:
+        algorithm = resolved.component("algorithm").instantiate()
+        assert isinstance(algorithm, Algorithm)
+        after = algorithm.prepare_recipe(copy.deepcopy(after), registry)
     if after == before:
         return resolved
     source = resolved.source

@@ -18,17 +18,33 @@ from typing import TYPE_CHECKING, Any
 from pydantic import Field
 
 import retarget
-from retarget import Layout, ObsSpec, PluginConfig, PluginError, Sensor, StepContext
+from retarget import (
+    Layout,
+    ObsSpec,
+    PluginConfig,
+    PluginError,
+    RecipeError,
+    RetargetError,
+    Sensor,
+    StepContext,
+)
 from retarget.kinds.capabilities import Exportable, PoseEstimating
 
 if TYPE_CHECKING:
     import torch
+
+    from retarget.kinds.lookup import PluginLookup
 
 
 class EstimatedBodyConfig(PluginConfig):
     estimator: str | None = Field(
         None, description="a pose estimator run (runs/NAME/latest); None: an untrained "
         "estimator over a 3-frame three-point window (tests and the contract suite)",
+    )  # fmt: skip
+    checkpoint: str | None = Field(
+        None, description="the estimator run's checkpoint, relative to the run; a new run "
+        "locks the newest one (None: the newest when the sensor is bound)",
+        pattern=r"^checkpoints/ckpt-[0-9]+\.pt$",
     )  # fmt: skip
 
 
@@ -71,6 +87,34 @@ class EstimatedBody(Sensor[EstimatedBodyConfig]):
             torch.manual_seed(0)
             self._net = DeployedEstimator(PoseNet(size, (64,))).eval()
 
+    def pinned_config(self, registry: PluginLookup) -> EstimatedBodyConfig | None:
+        """The estimator run's directory and newest checkpoint, fixed in the new run's lock
+        (not a moving ``latest``); a run that is not a pose estimator is refused here."""
+        from retarget.recipe import parse_text
+        from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
+
+        name = self.config.estimator
+        if name is None:
+            return None
+        try:
+            run = resolve_run(name)
+            lock = parse_text((run / LOCK).read_text(encoding="utf-8"), str(run / LOCK),
+                              ".yaml").data  # fmt: skip
+            algorithm = lock["algorithm"]
+            kind = algorithm if isinstance(algorithm, str) else algorithm["type"]
+            latest = latest_checkpoint(run)
+        except (OSError, UnicodeDecodeError, KeyError, TypeError, RetargetError) as exc:
+            raise RecipeError(f"cannot read the estimator run {name}: {exc}",
+                              field="sensors", plugin=self.name) from None  # fmt: skip
+        if not issubclass(registry.get("algorithm", kind).cls, PoseEstimating):
+            raise RecipeError(f"{name} is a '{kind}' run, not a pose estimator",
+                              field="sensors", plugin=self.name)  # fmt: skip
+        checkpoint = self.config.checkpoint or str(latest.relative_to(run))
+        shipped = name.startswith("pretrained:")  # a shipped model keeps its name
+        return self.config.model_copy(
+            update={"estimator": name if shipped else str(run), "checkpoint": checkpoint}
+        )
+
     def _bind_run(self, layout: Layout, run: str) -> None:
         """The estimator run's own sensors and deployed network, resolved against the
         recipe's plugins (as a student resolves its teacher)."""
@@ -82,7 +126,12 @@ class EstimatedBody(Sensor[EstimatedBodyConfig]):
                 "needs the plugin registry to load its estimator run", plugin=self.name,
                 hint="environments built from a recipe connect(registry) before bind",
             )
-        loaded = load_run(run, self.registry, num_envs=1, clips=[idle_clip(2.0)])
+        from retarget.train.run_dir import resolve_run
+
+        ckpt = self.config.checkpoint
+        where = resolve_run(run)
+        loaded = load_run(where, self.registry, num_envs=1, clips=[idle_clip(2.0)],
+                          checkpoint=where / ckpt if ckpt else None)  # fmt: skip
         algorithm = loaded.algorithm
         if not (isinstance(algorithm, PoseEstimating) and isinstance(algorithm, Exportable)):
             raise PluginError(f"{run} is not a pose estimator run", plugin=self.name)

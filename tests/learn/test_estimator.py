@@ -227,3 +227,36 @@ def test_the_estimate_as_a_sensor_composes_in_a_recipe(tmp_path: Path) -> None:
     ort = pytest.importorskip("onnxruntime")
     (first,) = ort.InferenceSession(str(folder / stage["onnx"])).run(None, {"obs": inputs.numpy()})
     np.testing.assert_allclose(first, want.numpy(), atol=1e-5)
+
+
+def test_the_estimator_sensor_locks_the_checkpoint_it_reads(tmp_path: Path, capsys) -> None:
+    """A two-stage run's lock names the estimator run's directory and checkpoint (not its
+    moving `latest`), as a student's names its teacher's; a run that is not a pose estimator
+    is refused before anything is built."""
+    import yaml
+
+    recipe = tmp_path / "est.yaml"
+    recipe.write_text(ESTIMATOR)
+    assert main(["train", str(recipe), "--steps", "128", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard", "--checkpoint-every", "1"]) == 0  # fmt: skip
+    est_run = (tmp_path / "est" / "latest").resolve()
+    first = sorted((est_run / "checkpoints").glob("ckpt-*.pt"))[-1].name
+    student = tmp_path / "student.yaml"
+    student.write_text(TINY.replace("name: tiny", "name: two_stage").replace(
+        "sensors: [three_point]",
+        f"sensors: [three_point, {{type: estimated_body, estimator: {tmp_path}/est/latest}}]"))
+    assert main(["train", str(student), "--steps", "32", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    lock = yaml.safe_load((tmp_path / "two_stage" / "latest" / "recipe.lock.yaml").read_text())
+    (sensor,) = [s for s in lock["sensors"] if s["type"] == "estimated_body"]
+    assert sensor["estimator"] == str(est_run) and sensor["checkpoint"] == f"checkpoints/{first}"
+
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(TINY.replace("name: tiny", "name: bad").replace(
+        "sensors: [three_point]",
+        "sensors: [three_point, {type: estimated_body, estimator: "
+        f"{tmp_path}/two_stage/latest}}]"))
+    capsys.readouterr()
+    assert main(["train", str(bad), "--steps", "32", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 2  # fmt: skip
+    assert "not a pose estimator" in capsys.readouterr().err
