@@ -77,7 +77,7 @@ class CharacterCommand(Command):
 
     def run(self, args: argparse.Namespace) -> int:
         width, height = args.size
-        registry = getattr(self, "registry", None) or retarget.load_plugins()
+        registry = self.plugins()
         character = _character(registry, args.name if args.character_command == "show"
                                else args.character, _parse_sets(args.set))
         args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -61,7 +61,7 @@ class BenchCommand(Command):
         # torch's intra-op threads spin between the env's many small tensor ops and steal
         # cores from MuJoCo's pool (measured: physics 40% slower with 2 torch threads)
         torch.set_num_threads(1)
-        resolved = load_from_args(args, self.registry)
+        resolved = load_from_args(args, self.plugins())
         env = env_from_recipe(resolved, num_envs=args.num_envs, threads=args.threads)
         settings = env.sim.settings
         gen = torch.Generator().manual_seed(0)

@@ -123,7 +123,7 @@ class ExpertCommand(Command):
             console.print("retarget expert: no motion files matched")
             return 2
         shorthands = {"character": args.character, "scene": args.scene}
-        resolved = load(args.recipe, self.registry, assignments=args.assignments,
+        resolved = load(args.recipe, self.plugins(), assignments=args.assignments,
                         shorthands={**shorthands, "motions": str(files[0])})  # fmt: skip
         recipe = resolved.to_dict()
         recipe["motions"] = {"path": None}
@@ -156,7 +156,7 @@ class ExpertCommand(Command):
                 if args.jobs == 1:
                     for job in jobs:
                         sub = bar.add_task(f"  {job['name']}", total=None)
-                        job = {**job, "registry": self.registry,
+                        job = {**job, "registry": self.plugins(),
                                "progress": lambda n, s=sub: bar.advance(s, n)}  # fmt: skip
                         figures[job["name"]] = fig = plan_clip(job)
                         bar.remove_task(sub)

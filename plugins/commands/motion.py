@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import retarget
 from retarget import Command, MotionError, RetargetError
@@ -13,6 +13,7 @@ from retarget.commands.numbers import MAX_PIXELS, MIN_PIXELS, count, image_size
 from retarget.errors import require_extra
 
 if TYPE_CHECKING:
+    from retarget.kinds.lookup import PluginLookup
     from retarget.motion.clip import MotionClip
 
 
@@ -25,21 +26,21 @@ def _add_format_args(parser: argparse.ArgumentParser) -> None:
                         help="position-only files: the capture's frame rate")  # fmt: skip
 
 
-def _formats(args: argparse.Namespace, registry: Any) -> dict:
+def _formats(args: argparse.Namespace, registry: PluginLookup) -> dict:
     """The readers the flags ask for, from the invocation's registry (never reloaded)."""
     chosen = getattr(args, "motion_format", None)
     joints, fps = getattr(args, "joints", None), getattr(args, "source_fps", None)
     if chosen is None and (joints is not None or fps is not None):
         chosen = "positions"
     if chosen is not None:
-        entry = (registry or retarget.load_plugins()).get("motion_format", chosen)
+        entry = registry.get("motion_format", chosen)
         settings = {k: v for k, v in (("joints", joints), ("fps", fps)) if v is not None}
         try:
             config = entry.cls.Config.model_validate(settings)
         except ValueError as exc:
             raise RetargetError(f"--format {chosen}: {exc}") from None
         return {chosen: entry.cls(config)}
-    return (registry or retarget.load_plugins()).motion_formats()
+    return registry.motion_formats()
 
 
 def _read(path: str, formats: dict) -> MotionClip:
@@ -120,7 +121,7 @@ class MotionCommand(Command):
         )
 
     def run(self, args: argparse.Namespace) -> int:
-        self.formats = _formats(args, getattr(self, "registry", None))
+        self.formats = _formats(args, self.plugins())
         if args.motion_action == "inspect":
             return self._inspect(args)
         if args.motion_action == "generate":

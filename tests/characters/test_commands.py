@@ -10,12 +10,14 @@ import numpy as np
 import pytest
 
 from retarget.plugins.characters.commands import CharacterCommand
+from retarget.registry.loader import load_plugins
 
 MOCAP = Path("/work/shared/data/mocap/bandai_d2_wave-right-hand_normal_018.bvh")
 
 
 def _run(argv: list[str]) -> int:
     cmd = CharacterCommand()
+    cmd.connect(load_plugins())  # as the CLI does before run()
     parser = argparse.ArgumentParser()
     cmd.add_arguments(parser)
     return cmd.run(parser.parse_args(argv))

@@ -14,9 +14,17 @@ import pytest
 from retarget.errors import MotionError, RetargetError
 from retarget.plugins.commands.motion import MotionCommand
 from retarget.plugins.formats.bvh import Bvh
+from retarget.registry.loader import load_plugins
 
 os.environ.setdefault("MUJOCO_GL", "osmesa")
 
+
+
+def _command() -> MotionCommand:
+    """The command as the CLI hands it over: connected to the invocation's registry."""
+    cmd = MotionCommand()
+    cmd.connect(load_plugins())
+    return cmd
 
 def _args(*argv: str) -> argparse.Namespace:
     parser = argparse.ArgumentParser()
@@ -41,20 +49,20 @@ def _read_png(path: Path) -> np.ndarray:
 def test_inspect_prints_a_row_per_file(tmp_path: Path, capsys, mocap_dir: Path):
     sample = Bvh.write_sample(tmp_path)
     real = mocap_dir / "bandai_d2_walk_normal_020.bvh"
-    assert MotionCommand().run(_args("inspect", str(sample), str(real))) == 0
+    assert _command().run(_args("inspect", str(sample), str(real))) == 0
     out = capsys.readouterr().out
     assert "sample.bvh" in out and "bandai" in out and "290" in out and "canonical" in out
 
 
 def test_inspect_missing_file_is_a_user_error(tmp_path: Path):
     with pytest.raises(MotionError, match="no such file"):
-        MotionCommand().run(_args("inspect", str(tmp_path / "nope.bvh")))
+        _command().run(_args("inspect", str(tmp_path / "nope.bvh")))
 
 
 def test_show_writes_a_picture_of_the_body(tmp_path: Path):
     sample = Bvh.write_sample(tmp_path)
     out = tmp_path / "s.png"
-    assert MotionCommand().run(_args("show", str(sample), "--out", str(out), "--frames", "2",
+    assert _command().run(_args("show", str(sample), "--out", str(out), "--frames", "2",
                                      "--size", "96")) == 0
     img = _read_png(out)
     assert img.shape == (96, 2 * 96 + 4, 3)
@@ -67,18 +75,18 @@ def test_show_writes_a_picture_of_the_body(tmp_path: Path):
 def test_show_rejects_unknown_output(tmp_path: Path):
     sample = Bvh.write_sample(tmp_path)
     with pytest.raises(RetargetError, match=r"\.png or \.mp4"):
-        MotionCommand().run(_args("show", str(sample), "--out", str(tmp_path / "x.gif")))
+        _command().run(_args("show", str(sample), "--out", str(tmp_path / "x.gif")))
 
 
 def test_show_cameras_draws_a_row_of_headset_views_per_frame(tmp_path: Path, capsys):
     sample = Bvh.write_sample(tmp_path)
     out = tmp_path / "views.png"
-    assert MotionCommand().run(_args("show", str(sample), "--out", str(out), "--frames", "2",
+    assert _command().run(_args("show", str(sample), "--out", str(out), "--frames", "2",
                                      "--size", "64", "--cameras", "quest2")) == 0  # fmt: skip
     img = _read_png(out)
     assert img.shape == (2 * 48 + 4, 4 * 64 + 3 * 4, 3)  # 2 frames x 4 cameras of 64x48
     assert np.array_equal(img[..., 0], img[..., 2])  # grayscale views
     assert "2 frames x 4 quest2 cameras" in capsys.readouterr().out
     with pytest.raises(RetargetError, match=r"--cameras draws a \.png"):
-        MotionCommand().run(_args("show", str(sample), "--out", str(tmp_path / "v.mp4"),
+        _command().run(_args("show", str(sample), "--out", str(tmp_path / "v.mp4"),
                                   "--cameras", "aria"))  # fmt: skip
