@@ -110,7 +110,7 @@ def test_tracking_env_names_what_an_environment_lacks() -> None:
     from retarget.kinds.tracking_env import tracking_env
     from retarget.testing.fakes import FakeVecEnv
 
-    with pytest.raises(retarget.PluginError, match="has no layout, library"):
+    with pytest.raises(retarget.PluginError, match="has no last_context, layout, library"):
         tracking_env(FakeVecEnv(num_envs=2), "estimator")
 
 

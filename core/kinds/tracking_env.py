@@ -15,6 +15,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
+from typing_extensions import get_protocol_members
+
 from retarget.errors import PluginError
 from retarget.kinds.algorithm import VecEnv
 
@@ -67,9 +69,8 @@ class TrackingEnv(VecEnv, Protocol):
         ...
 
 
-MEMBERS = ("layout", "library", "reference", "sensors", "observers", "scene",
-           "window_offsets", "sim", "last_context", "place_state", "observe_now")  # fmt: skip
-"""Every member of :class:`TrackingEnv`, in the order a missing one is reported."""
+MEMBERS = tuple(sorted(get_protocol_members(TrackingEnv)))
+"""Every member of :class:`TrackingEnv` (those of ``VecEnv`` included), as reported missing."""
 
 
 def tracking_env(env: object, plugin: str) -> TrackingEnv:

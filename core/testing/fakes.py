@@ -13,12 +13,11 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import mujoco
-import numpy as np
 import torch
 
 from retarget.kinds import Character, Scene
 from retarget.kinds.state import Layout, ReferenceBatch, SimState, StepContext
-from retarget.scene.floor import add_floor
+from retarget.scene.ground import Ground
 from retarget.sim.world import World, build_world
 
 if TYPE_CHECKING:
@@ -135,21 +134,11 @@ class TinyCharacter(Character):
         return ("tail_swing",)
 
 
-class FlatScene(Scene):
-    """A flat floor at height 0: the scene the contract suite gives observers."""
+class FlatScene(Ground):
+    """A flat floor at height 0: the scene the contract suite gives observers (the floor
+    every environment has without a scene, under a name of its own)."""
 
     name = "flat_test"
-
-    def build(self, spec: mujoco.MjSpec) -> None:
-        add_floor(spec)
-
-    def height_at(self, xy: torch.Tensor) -> torch.Tensor:
-        return torch.zeros(xy.shape[:-1], dtype=torch.float32)
-
-    def surface_points(self, count: int, rng: np.random.Generator) -> np.ndarray:
-        pts = rng.uniform(-2.0, 2.0, size=(1, count, 3))
-        pts[..., 2] = 0.0
-        return pts
 
 
 _TINY_WORLD: World | None = None

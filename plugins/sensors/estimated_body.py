@@ -58,7 +58,6 @@ class EstimatedBody(Sensor[EstimatedBodyConfig]):
         super().__init__(config)
         self._net: torch.nn.Module | None = None
         self._inner: list[Sensor[Any]] = []
-        self._width = 0
 
     def bind(self, layout: Layout) -> None:
         super().bind(layout)
@@ -67,7 +66,6 @@ class EstimatedBody(Sensor[EstimatedBodyConfig]):
             self._bind_untrained(layout)
         else:
             self._bind_run(layout, self.config.estimator)
-        self._width = sum(int(s.spec(layout).size) for s in self._inner)
 
     def _bind_untrained(self, layout: Layout) -> None:
         """A fixed, untrained estimator over three-point devices (tests, the contract kit)."""
@@ -146,7 +144,8 @@ class EstimatedBody(Sensor[EstimatedBodyConfig]):
     def deployable(self) -> tuple[torch.nn.Module, int, dict[str, Any]]:
         if self._net is None:
             raise PluginError("deployable() before bind(layout)", plugin=self.name)
-        return self._net, self._width, {
+        width = sum(int(s.spec(self._layout).size) for s in self._inner)
+        return self._net, width, {
             "frame": "headset (the current headset's ground point and heading)",
             "inputs": [{"name": s.name, "size": int(s.spec(self._layout).size)}
                        for s in self._inner],
