@@ -109,6 +109,22 @@ class BeamTracker:
         plan = settings.model_copy(update={"threads": threads, "backend": "mujoco"})
         self.sim = make_sim(env.sim.model, layout, c.samples, plan)
         self._fields = self.sim.STATE_FIELDS
+        model = self.sim.model
+        self._dof = np.asarray(model.jnt_dofadr[model.actuator_trnid[: layout.nu, 0]], np.intp)
+        kp = np.maximum(-model.actuator_biasprm[: layout.nu, 1], 1e-9)
+        self._damping = -model.actuator_biasprm[: layout.nu, 2] / kp  # kd / kp, seconds
+
+    def _feedforward(self, row: int) -> np.ndarray:
+        """``(nu,)``: what the nominal target gains so that a PD servo moving with the
+        reference does not lag it: its damping torque ``kd x qdot`` cancelled by ``kp x
+        (damping x qdot)`` more target, in action units. (Adding the current state's
+        gravity torques over kp the same way was tried: it made walks worse, the stance
+        leg's torque comes through the contacts, not the tree.)"""
+        c = self.config
+        if not c.velocity_ff:
+            return np.zeros(self.env.layout.nu)
+        qd = self.env.reference.qvel64[row][self._dof]
+        return c.velocity_ff * self._damping * qd / self._scale
 
     # ------------------------------------------------------------------ helpers
 
@@ -232,7 +248,8 @@ class BeamTracker:
             for j in range(S):
                 angles = self.sim.raw("qpos")[:, self._aq]
                 fb = c.gain * (ref_q[rows[j]][self._aq][None] - angles) / self._scale
-                acts[:, j] = np.clip(nominal[j][None] + off + fb, self._lo, self._hi)
+                ff = self._feedforward(int(rows[j]))[None]
+                acts[:, j] = np.clip(nominal[j][None] + off + fb + ff, self._lo, self._hi)
                 bad |= self.sim.step(acts[:, j])
                 qpos[:, j], qvel[:, j] = self.sim.raw("qpos"), self.sim.raw("qvel")
                 body[:, j] = self.sim.state.body_pos.numpy()
@@ -247,7 +264,8 @@ class BeamTracker:
                 angles = self.sim.raw("qpos")[:, self._aq]
                 fb = c.gain * (ref_q[row][self._aq][None] - angles) / self._scale
                 target = self._nominal(np.array([min(row + c.lead, last_row)]))[0]
-                bad |= self.sim.step(np.clip(target[None] + off + fb, self._lo, self._hi))
+                ff = self._feedforward(row)[None]
+                bad |= self.sim.step(np.clip(target[None] + off + fb + ff, self._lo, self._hi))
                 scored = row
             cost = (self._cost(scored) + c.running * running
                     + c.weights.effort * np.square(off).mean(-1))  # fmt: skip

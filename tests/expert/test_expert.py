@@ -139,3 +139,22 @@ def test_cli_plans_resumes_and_a_student_clones_it(clip_file, tmp_path) -> None:
     dino = _cli("train", "--character", "dino", "--expert", str(out), "--steps", "64",
                 "--runs-dir", str(runs), cwd=tmp_path)  # fmt: skip
     assert dino.returncode != 0 and "--character human" in dino.stderr + dino.stdout
+
+
+def test_velocity_feedforward_cancels_the_servo_damping(track) -> None:
+    """``velocity_ff`` adds kd/kp x the reference joint velocity to the target, so a PD servo
+    moving at the reference speed has no damping lag; off, it adds nothing."""
+    from retarget.sim.actuation import describe_actuation
+
+    env, _ = track
+    on = BeamTracker(env, ExpertConfig(**SMALL, velocity_ff=1.0))
+    off = BeamTracker(env, ExpertConfig(**SMALL))
+    pd = describe_actuation(on.sim.model, "pd")
+    row = int(env.library.start[0]) + 10
+    model = on.sim.model
+    dof = model.jnt_dofadr[model.actuator_trnid[: env.layout.nu, 0]]
+    qd = env.reference.qvel64[row][dof]
+    want = np.asarray(pd["kd"]) / np.asarray(pd["kp"]) * qd / np.asarray(pd["scale"])
+    np.testing.assert_allclose(on._feedforward(row), want, rtol=1e-6, atol=1e-12)
+    assert np.abs(want).max() > 0  # the idle clip moves: the check is not 0 == 0
+    assert not off._feedforward(row).any()
