@@ -70,6 +70,8 @@ def main() -> int:
     parser.add_argument("--teacher", help="the shipped teacher's name (students)")
     parser.add_argument("--cores", type=float, default=1.0, help="cores the training used")
     parser.add_argument("--notes", default="")
+    parser.add_argument("--no-state", action="store_true", help="package only: leave "
+                        "benchmarks/pretrain/NAME as it is (a snapshot of a run still training)")
     args = parser.parse_args()
     run = resolve_run(args.run)
     lock = yaml.safe_load((run / LOCK).read_text())
@@ -97,7 +99,8 @@ def main() -> int:
         notes=args.notes,
     )  # fmt: skip
     print(package(run, card, teacher=card.teacher))
-    print(keep_state(run, args.name, card.teacher))
+    if not args.no_state:
+        print(keep_state(run, args.name, card.teacher))
     return 0
 
 
