@@ -42,7 +42,7 @@ class ExpertConfig(BaseModel):
                          "noise to their parent's (decayed) offset")
     gain: float = Field(1.0, ge=0, le=10, description="feedback added to every action: gain "
                         "x (reference angle - current angle), in action units")
-    velocity_ff: float = Field(0.0, ge=0, le=2, description="share of the servo's damping "
+    velocity_ff: float = Field(1.0, ge=0, le=2, description="share of the servo's damping "
                                "lag cancelled: the nominal target gains damping x the "
                                "reference joint velocity (kd/kp x qdot)")
     lead: int = Field(1, ge=0, le=10, description="the nominal targets are this many frames "

@@ -142,13 +142,13 @@ def test_cli_plans_resumes_and_a_student_clones_it(clip_file, tmp_path) -> None:
 
 
 def test_velocity_feedforward_cancels_the_servo_damping(track) -> None:
-    """``velocity_ff`` adds kd/kp x the reference joint velocity to the target, so a PD servo
-    moving at the reference speed has no damping lag; off, it adds nothing."""
+    """``velocity_ff`` (on by default) adds kd/kp x the reference joint velocity to the
+    target, so a PD servo moving at the reference speed has no damping lag; 0 adds nothing."""
     from retarget.sim.actuation import describe_actuation
 
     env, _ = track
-    on = BeamTracker(env, ExpertConfig(**SMALL, velocity_ff=1.0))
-    off = BeamTracker(env, ExpertConfig(**SMALL))
+    on = BeamTracker(env, ExpertConfig(**SMALL))  # the default
+    off = BeamTracker(env, ExpertConfig(**SMALL, velocity_ff=0.0))
     pd = describe_actuation(on.sim.model, "pd")
     row = int(env.library.start[0]) + 10
     model = on.sim.model
