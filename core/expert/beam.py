@@ -28,6 +28,7 @@ import torch
 
 from retarget.errors import PluginError
 from retarget.expert.config import ExpertConfig
+from retarget.sim.actuation import describe_actuation
 from retarget.sim.backend import make_sim
 
 
@@ -111,8 +112,10 @@ class BeamTracker:
         self._fields = self.sim.STATE_FIELDS
         model = self.sim.model
         self._dof = np.asarray(model.jnt_dofadr[model.actuator_trnid[: layout.nu, 0]], np.intp)
-        kp = np.maximum(-model.actuator_biasprm[: layout.nu, 1], 1e-9)
-        self._damping = -model.actuator_biasprm[: layout.nu, 2] / kp  # kd / kp, seconds
+        servo = describe_actuation(model, "pd")
+        self._damping = np.asarray(servo["kd"]) / np.asarray(servo["kp"])  # seconds
+        if self._damping.shape != (layout.nu,):
+            raise PluginError("every actuator must be a PD joint servo", plugin="expert")
 
     def _feedforward(self, row: int) -> np.ndarray:
         """``(nu,)``: what the nominal target gains so that a PD servo moving with the
