@@ -4,12 +4,16 @@ figures.
 
     python benchmarks/heldout_eval.py RUN [RUN ...] --style normal --out results.json
     python benchmarks/heldout_eval.py pretrained:human-teacher --kinds walk,run --max-clips 20
+    python benchmarks/heldout_eval.py RUN --kinds walk,turn --rest-ends   # set off and stop
 
 The corpus is ``../shared/data/mocap_corpus`` (or ``$RETARGET_SHARED_DATA/mocap_corpus``); a
 run must not have trained on ``--style`` (the packaged corpus recipes hold ``normal`` out).
 Each kind is one ``retarget eval --protocol phc`` on the clips of that kind and style, so its
 figures pool the kind's seconds exactly. ``--max-clips`` takes every k-th clip of a kind to
-keep a quick look short. Prints one table per run and writes every figure as JSON.
+keep a quick look short. ``--rest-ends`` measures, instead of each clip, its start from
+standing still and its stop (``retarget.motion.rest_ends``: the held-out take's own poses,
+time-warped), which the corpus's takes, cut mid-stride, never show. Prints one table per run
+and writes every figure as JSON.
 """
 
 from __future__ import annotations
@@ -48,13 +52,35 @@ def corpus_files(style: str, kind: str, max_clips: int | None) -> list[Path]:
     return chosen
 
 
+def write_rest_ends(files: list[Path], folder: Path) -> int:
+    """The start-from-rest and stop variants of ``files`` written to ``folder`` as BVH."""
+    import retarget
+    from retarget.motion.bvh_write import write_bvh
+    from retarget.motion.clip_cache import read_cached
+    from retarget.motion.rest_ends import rest_ends
+    from retarget.motion.sources import reader_for
+
+    formats = retarget.load_plugins().motion_formats()
+    count = 0
+    for f in files:
+        for variant in rest_ends(read_cached(reader_for(f, formats), f, None)):
+            write_bvh(variant, folder / f"{variant.name}.bvh")
+            count += 1
+    return count
+
+
 def evaluate(run: str, files: list[Path], num_envs: int, sets: list[str] = (),
-             checkpoint: str | None = None) -> dict:
-    """``retarget eval --protocol phc`` over ``files`` (linked into one folder)."""
+             checkpoint: str | None = None, rest: bool = False) -> dict:
+    """``retarget eval --protocol phc`` over ``files`` (linked into one folder), or over
+    their rest-end variants (``rest``)."""
     folder = Path(tempfile.mkdtemp(prefix="heldout-"))
     try:
-        for f in files:
-            (folder / f.name).symlink_to(f.resolve())
+        if rest:
+            if not write_rest_ends(files, folder):
+                return {"runs": 0}
+        else:
+            for f in files:
+                (folder / f.name).symlink_to(f.resolve())
         report = folder / "eval.json"
         cmd = [sys.executable, "-m", "retarget", "eval", run, "--motions", str(folder),
                "--protocol", "phc", "--num-envs", str(num_envs), "--json", str(report),
@@ -77,6 +103,8 @@ def main() -> int:
     parser.add_argument("--checkpoint", help="a checkpoint file of the (one) run")
     parser.add_argument("--set", dest="sets", action="append", default=[],
                         help="passed to retarget eval (e.g. algorithm.reach_controllers=false)")
+    parser.add_argument("--rest-ends", action="store_true",
+                        help="measure each clip's start from and stop to standing still")
     args = parser.parse_args()
     results: dict[str, dict[str, dict[str, float]]] = {}
     for run in args.runs:
@@ -86,10 +114,12 @@ def main() -> int:
             if not files:
                 print(f"no {kind} clips of style {args.style}", file=sys.stderr)
                 continue
-            overall = evaluate(run, files, args.num_envs, args.sets, args.checkpoint)
+            overall = evaluate(run, files, args.num_envs, args.sets, args.checkpoint,
+                               args.rest_ends)
             results[run][kind] = {k: overall[k] for k in FIGURES if k in overall}
             results[run][kind]["clips"] = len(files)
-        print(f"\n{run} on held-out style '{args.style}'")
+        made = " (set off from / stopped to standing still)" if args.rest_ends else ""
+        print(f"\n{run} on held-out style '{args.style}'{made}")
         print(f"{'kind':8} {'clips':>5} " + " ".join(f"{k[:14]:>14}" for k in FIGURES[:-1]))
         for kind, figures in results[run].items():
             cells = " ".join(f"{figures.get(k, float('nan')):14.3f}" for k in FIGURES[:-1])

@@ -21,9 +21,18 @@ def resample(clip: MotionClip, fps: float = CONTROL_RATE) -> MotionClip:
         raise ValueError(f"fps must be positive, got {fps}")
     if abs(fps - clip.fps) < 1e-9:
         return clip
-    n = clip.num_frames
     count = int(np.floor(clip.duration * fps + 1e-9)) + 1
-    src = np.arange(count) / fps * clip.fps
+    return at_frames(clip, np.arange(count) / fps * clip.fps, fps)
+
+
+def at_frames(clip: MotionClip, src: np.ndarray, fps: float | None = None) -> MotionClip:
+    """A clip whose frame ``i`` is ``clip`` at fractional frame ``src[i]`` (root linear,
+    rotations slerp, contacts of the nearest frame), played at ``fps`` (default: the clip's).
+
+    Any monotone or non-monotone time map works, so one routine serves both resampling and
+    time-warping (slowing a clip to a standstill)."""
+    n = clip.num_frames
+    src = np.clip(np.asarray(src, dtype=np.float64), 0.0, n - 1)
     i0 = np.clip(np.floor(src).astype(np.int64), 0, max(n - 2, 0))
     i1 = np.minimum(i0 + 1, n - 1)
     a = np.clip(src - i0, 0.0, 1.0)
@@ -31,4 +40,5 @@ def resample(clip: MotionClip, fps: float = CONTROL_RATE) -> MotionClip:
     local = rot.slerp(clip.local_rot[i0], clip.local_rot[i1], a[:, None])
     nearest = np.clip(np.rint(src).astype(np.int64), 0, n - 1)
     contacts = clip.contacts[nearest] if clip.contacts is not None else None
-    return clip.with_(fps=float(fps), root_pos=root, local_rot=local, contacts=contacts)
+    return clip.with_(fps=float(fps or clip.fps), root_pos=root, local_rot=local,
+                      contacts=contacts)  # fmt: skip

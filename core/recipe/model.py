@@ -57,6 +57,12 @@ class MotionsSection(Strict):
         description="leave out files whose name matches one of these patterns (a held-out "
         "style: ['*_normal_*'])",
     )
+    rest_ends: bool = Field(
+        False,
+        description="also train on each moving clip set off from standing still and slowed to "
+        "a stop (its ends time-warped, retarget.motion.rest_ends): takes cut mid-stride have "
+        "neither, and a live user does both",
+    )
 
 
 class Recipe(Strict):
