@@ -222,6 +222,9 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
     def fresh_rank(self, generator: torch.Generator) -> None:
         self._ready().fresh_rank(generator)
 
+    def warm_start(self, state: Mapping[str, Any], inputs: Mapping[str, torch.Tensor]) -> None:
+        self._ready().warm_start(state, inputs)
+
 
 @retarget.hookimpl
 def register_algorithms(register) -> None:

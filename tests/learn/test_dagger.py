@@ -253,3 +253,26 @@ def test_a_recorded_headset_capture_drives_the_image_student(tmp_path) -> None:
     obs = env.place(torch.zeros(2, dtype=torch.long), torch.tensor([2, 5]))["actor"]
     seen = obs[:, image.start : image.start + image.size].reshape(2, *image.shape).numpy()
     np.testing.assert_allclose(seen, values[[2, 5]] / 255.0, atol=1e-6)
+
+
+def test_a_student_is_redistilled_from_another_students_weights(
+    teacher: Path, tmp_path: Path
+) -> None:
+    """``--init-from`` a student into a new DAgger run (a better teacher, more motions): it
+    starts acting exactly as that student, with fresh counters."""
+    recipe = student_recipe(tmp_path, teacher)
+    assert main(["train", str(recipe), "--steps", str(2 * SAMPLES), "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    student = tmp_path / "student" / "latest"
+    assert main(["train", str(recipe), "--init-from", str(student), "--set", "name=again",
+                 "--steps", str(SAMPLES), "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    again = tmp_path / "again" / "latest"
+    assert (again / "init_from.txt").is_file()
+    registry = load_plugins()
+    first = load_run(again, registry, num_envs=4,
+                     checkpoint=again / "checkpoints" / "ckpt-0000000.pt")
+    source = load_run(student, registry, num_envs=4)
+    assert first.algorithm.learner.env_steps == 0  # type: ignore[attr-defined]
+    obs = first.env.reset()
+    assert torch.allclose(first.algorithm.act(obs), source.algorithm.act(obs), atol=1e-5)
