@@ -70,12 +70,20 @@ def main() -> int:
     parser.add_argument("--teacher", help="the shipped teacher's name (students)")
     parser.add_argument("--cores", type=float, default=1.0, help="cores the training used")
     parser.add_argument("--notes", default="")
+    parser.add_argument("--plus-card", metavar="NAME", help="a run started --init-from this "
+                        "shipped model: its card's samples and CPU-hours are added to the run's")
     parser.add_argument("--no-state", action="store_true", help="package only: leave "
                         "benchmarks/pretrain/NAME as it is (a snapshot of a run still training)")
     args = parser.parse_args()
     run = resolve_run(args.run)
     lock = yaml.safe_load((run / LOCK).read_text())
     row = last_row(run)
+    before_steps, before_hours = 0, 0.0
+    if args.plus_card:  # read before packaging: shipping NAME may replace that very card
+        from retarget.pretrained import card as card_of
+
+        before = card_of(args.plus_card)
+        before_steps, before_hours = before.env_steps, before.cpu_hours
     metrics: dict[str, dict[str, float]] = {}
     if args.heldout:
         found = json.loads(args.heldout.read_text())
@@ -93,8 +101,9 @@ def main() -> int:
     sensors = [kind(s) for s in lock.get("sensors") or [] if actor is None or kind(s) in actor]
     card = ModelCard(
         name=args.name, summary=args.summary, character=character, sensors=sensors,
-        algorithm=algorithm, data=DATA, licence=LICENCE, env_steps=int(float(row["step"])),
-        cpu_hours=round(float(row["elapsed_s"]) / 3600 * args.cores, 3),
+        algorithm=algorithm, data=DATA, licence=LICENCE,
+        env_steps=before_steps + int(float(row["step"])),
+        cpu_hours=round(before_hours + float(row["elapsed_s"]) / 3600 * args.cores, 3),
         teacher=f"pretrained:{args.teacher}" if args.teacher else None, metrics=metrics,
         notes=args.notes,
     )  # fmt: skip
