@@ -52,8 +52,9 @@ def corpus_files(style: str, kind: str, max_clips: int | None) -> list[Path]:
     return chosen
 
 
-def write_rest_ends(files: list[Path], folder: Path) -> int:
-    """The start-from-rest and stop variants of ``files`` written to ``folder`` as BVH."""
+def write_rest_ends(files: list[Path], folder: Path, which: str = "both") -> int:
+    """The start-from-rest and stop variants of ``files`` (``which``: ``from_rest``,
+    ``to_rest`` or ``both``) written to ``folder`` as BVH."""
     import retarget
     from retarget.motion.bvh_write import write_bvh
     from retarget.motion.clip_cache import read_cached
@@ -64,19 +65,21 @@ def write_rest_ends(files: list[Path], folder: Path) -> int:
     count = 0
     for f in files:
         for variant in rest_ends(read_cached(reader_for(f, formats), f, None)):
+            if which != "both" and variant.meta["rest_end"] != which:
+                continue
             write_bvh(variant, folder / f"{variant.name}.bvh")
             count += 1
     return count
 
 
 def evaluate(run: str, files: list[Path], num_envs: int, sets: list[str] = (),
-             checkpoint: str | None = None, rest: bool = False) -> dict:
+             checkpoint: str | None = None, rest: str | None = None) -> dict:
     """``retarget eval --protocol phc`` over ``files`` (linked into one folder), or over
-    their rest-end variants (``rest``)."""
+    their rest-end variants (``rest``: which, see :func:`write_rest_ends`)."""
     folder = Path(tempfile.mkdtemp(prefix="heldout-"))
     try:
         if rest:
-            if not write_rest_ends(files, folder):
+            if not write_rest_ends(files, folder, rest):
                 return {"runs": 0}
         else:
             for f in files:
@@ -103,8 +106,10 @@ def main() -> int:
     parser.add_argument("--checkpoint", help="a checkpoint file of the (one) run")
     parser.add_argument("--set", dest="sets", action="append", default=[],
                         help="passed to retarget eval (e.g. algorithm.reach_controllers=false)")
-    parser.add_argument("--rest-ends", action="store_true",
-                        help="measure each clip's start from and stop to standing still")
+    parser.add_argument("--rest-ends", nargs="?", const="both",
+                        choices=("both", "from_rest", "to_rest"),
+                        help="measure each clip's start from (from_rest) and/or stop to "
+                        "(to_rest) standing still instead of the clip")
     args = parser.parse_args()
     results: dict[str, dict[str, dict[str, float]]] = {}
     for run in args.runs:
@@ -118,7 +123,7 @@ def main() -> int:
                                args.rest_ends)
             results[run][kind] = {k: overall[k] for k in FIGURES if k in overall}
             results[run][kind]["clips"] = len(files)
-        made = " (set off from / stopped to standing still)" if args.rest_ends else ""
+        made = f" (rest ends: {args.rest_ends})" if args.rest_ends else ""
         print(f"\n{run} on held-out style '{args.style}'{made}")
         print(f"{'kind':8} {'clips':>5} " + " ".join(f"{k[:14]:>14}" for k in FIGURES[:-1]))
         for kind, figures in results[run].items():

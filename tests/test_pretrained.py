@@ -135,12 +135,24 @@ README_EXAMPLE = "human-three_point-student"
 
 
 @pytest.mark.skipif(README_EXAMPLE not in SHIPPED, reason="the README's student is not shipped")
-def test_the_readme_first_example_plays_the_shipped_student(tmp_path: Path) -> None:
+def test_the_readme_first_example_plays_the_shipped_student(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     """README's first command, with a shorter clip: the shipped student driven by the sample
-    headset recording."""
+    headset recording, and how closely its head followed the headset."""
     out = tmp_path / "me.gif"
     rc = main(["play", f"pretrained:{README_EXAMPLE}", "--input",
                str(REPO / "examples" / "recordings" / "walk_openxr.jsonl"), "--seconds", "1",
                "--out", str(out)])  # fmt: skip
     assert rc == 0 and out.stat().st_size > 1000
+    said = capsys.readouterr().out
+    assert "head to headset" in said and " over 1.0 s" in said, said
     assert f"pretrained:{README_EXAMPLE}" in (REPO / "README.md").read_text()
+
+
+def test_follow_summary_names_when_the_headset_was_lost() -> None:
+    from retarget.cli.play_cmd import follow_summary
+
+    assert "followed to the end" in follow_summary([0.1, 0.2, 0.3], 36.0)
+    lost = follow_summary([0.1] * 36 + [0.6, 0.2], 36.0)
+    assert "lost it at 1.0 s" in lost and "60 cm max" in lost

@@ -130,6 +130,19 @@ def _replay_recorded(env, rows, rec: DeviceRecording, times, path: str) -> None:
         )
 
 
+def follow_summary(gaps: list[float], hz: float, lost_at: float = 0.5) -> str:
+    """How well an avatar followed a recorded headset: its head's distance to the headset,
+    and when it first lost it (SimXR's failure rule: farther than ``lost_at`` metres)."""
+    import numpy as np
+
+    g = np.asarray(gaps)
+    lost = np.flatnonzero(g > lost_at)
+    end = (f"lost it at {lost[0] / hz:.1f} s (head over {lost_at} m away)" if lost.size
+           else f"followed to the end (head within {lost_at} m every frame)")  # fmt: skip
+    return (f"head to headset {100 * g.mean():.0f} cm mean, {100 * g.max():.0f} cm max over "
+            f"{len(g) / hz:.1f} s; {end}")
+
+
 def run(args: argparse.Namespace, registry: Registry) -> int:
     import numpy as np
 
@@ -165,6 +178,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
                 "image source)", hint="train with --sensors hmd,ego_cameras",
             )  # fmt: skip
         observed: list[np.ndarray] = []
+        gaps: list[float] = []
         frames = render_rollout(
             env,
             require(loaded.algorithm, Acting, hint=PLAYS).act,
@@ -179,7 +193,10 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
             ghost=stream is None,
             observed=observed if images else None,
             group=group,
+            head_gap=gaps if stream is not None else None,
         )
+        if gaps:
+            out.print(f"{path}: {follow_summary(gaps, env.sim.settings.control_hz)}")
         if images:
             frames = [
                 np.concatenate([f, image_panel(o, images, f.shape[0])], axis=1)

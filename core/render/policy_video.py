@@ -10,6 +10,7 @@ import numpy as np
 import torch
 
 from retarget.env import RetargetEnv
+from retarget.kinds.state import StepContext
 from retarget.motion import skeleton as sk
 from retarget.render.character_view import FrameRenderer
 from retarget.render.motion import add_decor_geom
@@ -44,6 +45,7 @@ def render_rollout(
     elevation: float = -15.0,
     observed: list[np.ndarray] | None = None,
     group: str = "actor",
+    head_gap: list[float] | None = None,
 ) -> list[np.ndarray]:
     """Run ``policy`` in environment 0 from ``(clip, start)`` and render every control step.
 
@@ -52,7 +54,9 @@ def render_rollout(
     yellow boxes are the headset and controllers the policy was given. The camera follows the
     character from ``azimuth``/``elevation`` (degrees, world frame; 90 looks along +y).
     ``observed``, when given, receives environment 0's ``group`` observation of every frame
-    (what the policy read), e.g. to draw its camera views beside the video.
+    (what the policy read), e.g. to draw its camera views beside the video. ``head_gap``,
+    when given, receives each step's distance (m) from environment 0's simulated head to the
+    headset it was given: what a person wearing that headset sees of their avatar.
     """
     model = env.world.model
     data = mujoco.MjData(model)
@@ -77,6 +81,8 @@ def render_rollout(
             if observed is not None:
                 observed.append(obs[group][0].float().numpy().copy())
             obs, *_ = env.step(policy(obs))
+            if head_gap is not None and env.last_context is not None:
+                head_gap.append(headset_gap(env.last_context, env.layout.site("head")))
             row = int(lib.rows(env.clip[:1], env.frame[:1])[0, 0])
             copy_env_pose(env, 0, data)
             cam.lookat[:] = [data.qpos[0], data.qpos[1], 0.5 * top]
@@ -90,3 +96,9 @@ def render_rollout(
                 add_decor_geom(mujoco, scene, mujoco.mjtGeom.mjGEOM_BOX, [0.035] * 3, d[:3], DEVICE)
             frames.append(render.renderer.render().copy())
     return frames
+
+
+def headset_gap(ctx: StepContext, head: int) -> float:
+    """Environment 0's head-to-headset distance of a step, metres (the headset of frame 0)."""
+    headset = ctx.ref.devices[0, ctx.ref.window_offsets.index(0), 0, :3]
+    return float((ctx.sim.site_pos[0, head] - headset).norm())
