@@ -136,7 +136,7 @@ def test_built_in_algorithms_have_the_capabilities_they_define() -> None:
            for n in ("ppo", "dagger", "estimator", "expert_bc")}  # fmt: skip
     assert got == {
         "ppo": ["acting", "exportable", "warm_startable", "data_parallel"],
-        "dagger": ["acting", "exportable", "data_parallel"],
+        "dagger": ["acting", "exportable", "warm_startable", "data_parallel"],
         "estimator": ["exportable", "pose_estimating"],
         "expert_bc": ["acting", "exportable"],
     }
