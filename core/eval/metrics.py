@@ -46,6 +46,13 @@ def procrustes_error(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
     return (aligned - target).norm(dim=-1).mean(-1)
 
 
+def head_to_headset(ctx: StepContext, head: int) -> torch.Tensor:
+    """Distance from each environment's simulated head site to the headset it was given at
+    this frame, metres ``(N,)`` (SimXR's failure rule reads it against 0.5 m)."""
+    headset = ctx.ref.devices[:, ctx.ref.window_offsets.index(0), 0, :3]
+    return (ctx.sim.site_pos[:, head] - headset).norm(dim=-1)
+
+
 @dataclass
 class StepMetrics:
     """Metrics of one step for every environment, all (N,) float tensors (metres, radians)."""
@@ -100,8 +107,7 @@ class MetricProbe:
         hmd_rot = rotation_distance(r.site_quat[:, self.head], s.site_quat[:, self.head])
         ctrl = (s.site_pos[:, self.hands] - r.site_pos[:, self.hands]).norm(dim=-1)
         device_mean = (hmd + ctrl.sum(-1)) / 3.0
-        headset = ctx.ref.devices[:, ctx.ref.window_offsets.index(0), 0, :3]
-        head_gap = (s.site_pos[:, self.head] - headset).norm(dim=-1)
+        head_gap = head_to_headset(ctx, self.head)
         force = s.contact_force
         if self.sides is not None and ctx.ref.contacts.shape[1] == 2:
             sim_contact = torch.stack(

@@ -31,7 +31,7 @@ from retarget.learn.networks import GaussianActor
 from retarget.learn.normalizer import GroupNormalizer
 from retarget.learn.ppo import DeployedPolicy
 from retarget.learn.threads import torch_threads
-from retarget.learn.widen import sub_state, widen_module, widen_normalizer
+from retarget.learn.widen import widen_group_normalizers, widen_module
 
 
 class DaggerLearner:
@@ -230,11 +230,8 @@ class DaggerLearner:
         A student distilled from one teacher is re-distilled from a better one, or on more
         motions, in a fraction of the samples it took from scratch."""
         widen_module(self.actor, state["actor"], inputs[self.actor_key])
-        old = sub_state(state["obs_norm"], f"groups.{self.actor_key}")
-        if old:  # the old statistics count as ten rollouts, as for PPO's warm start
-            count = 10.0 * self.config.rollout_steps * self.num_envs
-            widen_normalizer(self.obs_norm.groups[self.actor_key], old,
-                             inputs[self.actor_key], count)  # fmt: skip
+        count = 10.0 * self.config.rollout_steps * self.num_envs  # as PPO's warm start
+        widen_group_normalizers(self.obs_norm.groups, state["obs_norm"], inputs, count)
         self.last_obs = None
 
     def state_dict(self) -> dict[str, Any]:

@@ -35,7 +35,7 @@ from retarget.learn.normalizer import GroupNormalizer, RunningNormalizer
 from retarget.learn.overlap import OverlapState
 from retarget.learn.storage import RolloutStorage
 from retarget.learn.threads import torch_threads
-from retarget.learn.widen import sub_state, widen_module, widen_normalizer
+from retarget.learn.widen import widen_group_normalizers, widen_module
 
 
 class DeployedPolicy(nn.Module):
@@ -449,9 +449,5 @@ class PPOLearner:
         # the old statistics count as ten rollouts: new inputs find their scale in a few
         # iterations while the kept ones barely move
         count = 10.0 * self.config.rollout_steps * self.num_envs
-        for key, norm in self.obs_norm.groups.items():
-            old = sub_state(state["obs_norm"], f"groups.{key}")
-            if not old:  # a group the source never had: statistics from this run's data
-                continue
-            widen_normalizer(norm, old, inputs[key], count)
+        widen_group_normalizers(self.obs_norm.groups, state["obs_norm"], inputs, count)
         self.last_obs = None

@@ -77,3 +77,16 @@ def sub_state(state: Mapping[str, torch.Tensor], prefix: str) -> dict[str, torch
     """The entries of a flat state dict under ``prefix.`` with the prefix removed."""
     head = prefix + "."
     return {k[len(head):]: v for k, v in state.items() if k.startswith(head)}
+
+
+def widen_group_normalizers(
+    groups: nn.ModuleDict, old_state: Mapping[str, torch.Tensor],
+    inputs: Mapping[str, torch.Tensor], count: float,
+) -> None:
+    """:func:`widen_normalizer` for each group of a ``GroupNormalizer`` (its ``groups``) from
+    the source's flat ``obs_norm`` state; a group the source never had keeps its statistics
+    (they come from the new run's data)."""
+    for key, norm in groups.items():
+        old = sub_state(old_state, f"groups.{key}")
+        if old:
+            widen_normalizer(norm, old, inputs[key], count)

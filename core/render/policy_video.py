@@ -10,7 +10,7 @@ import numpy as np
 import torch
 
 from retarget.env import RetargetEnv
-from retarget.kinds.state import StepContext
+from retarget.eval.metrics import head_to_headset
 from retarget.motion import skeleton as sk
 from retarget.render.character_view import FrameRenderer
 from retarget.render.motion import add_decor_geom
@@ -70,6 +70,7 @@ def render_rollout(
     top = float(env.sim.state.body_pos[0, :, 2].max())
     cam.distance, cam.elevation, cam.azimuth = 4.0 * max(1.0, top / 1.8), elevation, azimuth
     shift = np.array([0.0, ghost_offset, 0.0])
+    head = env.layout.site("head")
     frames = []
     # the training world has only MuJoCo's default headlight, which renders dim: light the
     # video like `character show` does (visual settings only; physics reads none of them)
@@ -82,7 +83,7 @@ def render_rollout(
                 observed.append(obs[group][0].float().numpy().copy())
             obs, *_ = env.step(policy(obs))
             if head_gap is not None and env.last_context is not None:
-                head_gap.append(headset_gap(env.last_context, env.layout.site("head")))
+                head_gap.append(float(head_to_headset(env.last_context, head)[0]))
             row = int(lib.rows(env.clip[:1], env.frame[:1])[0, 0])
             copy_env_pose(env, 0, data)
             cam.lookat[:] = [data.qpos[0], data.qpos[1], 0.5 * top]
@@ -97,8 +98,3 @@ def render_rollout(
             frames.append(render.renderer.render().copy())
     return frames
 
-
-def headset_gap(ctx: StepContext, head: int) -> float:
-    """Environment 0's head-to-headset distance of a step, metres (the headset of frame 0)."""
-    headset = ctx.ref.devices[0, ctx.ref.window_offsets.index(0), 0, :3]
-    return float((ctx.sim.site_pos[0, head] - headset).norm())
