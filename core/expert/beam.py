@@ -27,7 +27,7 @@ import numpy as np
 import torch
 
 from retarget.errors import PluginError
-from retarget.expert.config import ExpertConfig
+from retarget.expert.config import CostWeights, ExpertConfig
 from retarget.sim.actuation import describe_actuation
 from retarget.sim.backend import make_sim
 
@@ -49,6 +49,8 @@ class Track:
     """Beam members other than the best path, one row per (segment, member): their start
     state (``state_*`` fields of ``BatchedSim.STATE_FIELDS``), ``frame``, ``prev_action``,
     ``actions`` (rows, segment, nu) and ``steps`` (how many of them are real)."""
+    rescued: int = 0
+    """Segments of the kept pass planned again by the rescue (``ExpertConfig.rescue``)."""
 
     @property
     def frames(self) -> int:
@@ -77,7 +79,18 @@ class Track:
             "motion_seconds": self.motion_seconds,
             "cpu_seconds": self.cpu_seconds,
             "cpu_s_per_motion_s": self.cpu_seconds / max(self.motion_seconds, 1e-9),
+            "rescued_segments": self.rescued,
         }
+
+
+@dataclass(frozen=True)
+class _Mode:
+    """How one try at a segment samples and scores: the plain settings, or the rescue's."""
+
+    sigma: np.ndarray  # (nu,) offset noise per joint
+    lookahead: int
+    weights: CostWeights
+    running: float
 
 
 class BeamTracker:
@@ -106,7 +119,14 @@ class BeamTracker:
         limits = np.asarray(layout.torque_limits or np.ones(layout.nu), dtype=np.float64)
         if limits.shape != (layout.nu,) or limits.max() <= 0:
             limits = np.ones(layout.nu)
-        self._sigma = c.sigma * (limits / limits.max()) ** c.strength_power
+        strength = (limits / limits.max()) ** c.strength_power
+        self._modes = (
+            _Mode(c.sigma * strength, c.lookahead, c.weights, c.running),
+            _Mode(c.rescue.sigma * strength, c.rescue.lookahead,
+                  c.weights.model_copy(update={"pose": c.rescue.pose}), c.rescue.running),
+        )  # fmt: skip
+        self.rescues = 0
+        """Segments planned again by the rescue (all clips so far)."""
         plan = settings.model_copy(update={"threads": threads, "backend": "mujoco"})
         self.sim = make_sim(env.sim.model, layout, c.samples, plan)
         self._fields = self.sim.STATE_FIELDS
@@ -135,8 +155,11 @@ class BeamTracker:
         q = self.env.reference.qpos64[rows][:, self._aq]
         return np.clip(q / self._scale, self._lo, self._hi)
 
-    def _cost(self, row: int) -> np.ndarray:
-        ref, w, lay = self.env.reference, self.config.weights, self.env.layout
+    def _cost(self, row: int, w: CostWeights | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Every sample's cost against reference row ``row`` and its mean world distance of
+        the bodies (m)."""
+        ref, lay = self.env.reference, self.env.layout
+        w = w or self.config.weights
         s = self.sim.state
         bp, rb = s.body_pos.numpy(), ref.arrays["body_pos"][row].numpy()
         body = np.linalg.norm(bp - rb, axis=-1).mean(-1)
@@ -153,7 +176,7 @@ class BeamTracker:
             + w.velocity * np.square(v - rv).mean(-1)
             + w.pose * pose
         )
-        return np.where(np.isfinite(cost), cost, np.inf)
+        return np.where(np.isfinite(cost), cost, np.inf), body
 
     # ------------------------------------------------------------------ planning
 
@@ -180,16 +203,17 @@ class BeamTracker:
             "qvel": env.sim.raw("qvel")[0].copy(),
             "body": env.sim.state.body_pos[0].numpy().astype(np.float64),
         }
-        best: tuple[float, dict[str, np.ndarray], dict[str, np.ndarray]] | None = None
+        best: tuple[float, dict[str, np.ndarray], dict[str, np.ndarray], int] | None = None
         prior: np.ndarray | None = None
         for round_ in range(c.passes):
             noise = 1.0 if round_ == 0 else c.refine
+            before = self.rescues
             total, path, demos = self._search(placed, start, length, rng, prior, noise, progress)
             if best is None or total < best[0]:
-                best = (total, path, demos)
+                best = (total, path, demos, self.rescues - before)
             prior = best[1]["off"]
         assert best is not None
-        _, path, demos = best
+        _, path, demos, rescued = best
         frames = start + np.arange(length)
         return Track(
             clip=lib.names[clip],
@@ -202,6 +226,7 @@ class BeamTracker:
             ref_qpos0=env.reference.qpos64[start].copy(),
             cpu_seconds=time.process_time() - cpu0,
             demos=demos,
+            rescued=rescued,
         )
 
     def _search(
@@ -219,61 +244,25 @@ class BeamTracker:
         summed cost, the path (``acts``, ``qpos``, ``qvel``, ``body``, ``off`` per segment)
         and the beam members kept as demonstrations."""
         c, env = self.config, self.env
-        nu, K = env.layout.nu, c.samples
+        nu = env.layout.nu
         beam = placed
         dev = np.zeros((1, nu))
         last = np.zeros((1, nu))
         spent = np.zeros(1)
         segments: list[dict[str, np.ndarray]] = []
         demos: dict[str, list[np.ndarray]] = {}
-        ref_q = env.reference.qpos64
         last_row = start + length - 1
         f = 0
         while f < length - 1:
             S = min(c.segment, length - 1 - f)
             rows = start + f + 1 + np.arange(S)
-            nominal = self._nominal(np.minimum(rows + c.lead, last_row))
-            B = len(dev)
-            parent = rng.integers(0, B, K)
-            parent[: min(B, K)] = np.arange(min(B, K))
-            noise = rng.normal(size=(K, nu)) * self._sigma * noise_scale
-            noise[rng.random(K) < c.quiet] = 0.0
-            new_dev = c.carry * dev[parent] + noise
             base = prior[len(segments)][None] if prior is not None else 0.0
-            off = base + new_dev
-            self.sim.load_state_dict({k: v[parent] for k, v in beam.items()})
-            acts = np.zeros((K, S, nu))
-            qpos = np.zeros((K, S, self.sim.raw("qpos").shape[1]))
-            qvel = np.zeros((K, S, self.sim.raw("qvel").shape[1]))
-            body = np.zeros((K, S, *self.sim.state.body_pos.shape[1:]))
-            bad = np.zeros(K, dtype=bool)
-            running = np.zeros(K)
-            for j in range(S):
-                angles = self.sim.raw("qpos")[:, self._aq]
-                fb = c.gain * (ref_q[rows[j]][self._aq][None] - angles) / self._scale
-                ff = self._feedforward(int(rows[j]))[None]
-                acts[:, j] = np.clip(nominal[j][None] + off + fb + ff, self._lo, self._hi)
-                bad |= self.sim.step(acts[:, j])
-                qpos[:, j], qvel[:, j] = self.sim.raw("qpos"), self.sim.raw("qvel")
-                body[:, j] = self.sim.state.body_pos.numpy()
-                if c.running:
-                    running += self._cost(int(rows[j])) / S
-            end_state = self.sim.state_dict()
-            scored = rows[-1].item()
-            for _ in range(c.lookahead):
-                row = min(scored + 1, last_row)
-                if row == scored:
-                    break
-                angles = self.sim.raw("qpos")[:, self._aq]
-                fb = c.gain * (ref_q[row][self._aq][None] - angles) / self._scale
-                target = self._nominal(np.array([min(row + c.lead, last_row)]))[0]
-                ff = self._feedforward(row)[None]
-                bad |= self.sim.step(np.clip(target[None] + off + fb + ff, self._lo, self._hi))
-                scored = row
-            cost = (self._cost(scored) + c.running * running
-                    + c.weights.effort * np.square(off).mean(-1))  # fmt: skip
-            cost[bad] = np.inf
-            order = np.argsort(cost, kind="stable")[: c.beam]
+            args = (beam, dev, rows, last_row, base, noise_scale, rng)
+            seg = self._segment(*args, self._modes[0])
+            if c.rescue.threshold and seg["error"][seg["order"][0]] > c.rescue.threshold:
+                seg = self._segment(*args, self._modes[1])
+                self.rescues += 1
+            order, parent, cost = seg["order"], seg["parent"], seg["cost"]
             if c.keep:
                 kept = order[: c.keep]
                 for k, v in beam.items():
@@ -281,15 +270,14 @@ class BeamTracker:
                 demos.setdefault("frame", []).append(np.full(len(kept), f))
                 demos.setdefault("prev_action", []).append(last[parent[kept]])
                 padded = np.zeros((len(kept), c.segment, nu))
-                padded[:, :S] = acts[kept]
+                padded[:, :S] = seg["acts"][kept]
                 demos.setdefault("actions", []).append(padded)
                 demos.setdefault("steps", []).append(np.full(len(kept), S))
-            segments.append({"parent": parent[order], "acts": acts[order], "qpos": qpos[order],
-                             "qvel": qvel[order], "body": body[order],
-                             "off": off[order]})  # fmt: skip
-            beam = {k: v[order].copy() for k, v in end_state.items()}
+            segments.append({k: seg[k][order] for k in ("parent", "acts", "qpos", "qvel",
+                                                         "body", "off")})  # fmt: skip
+            beam = {k: v[order].copy() for k, v in seg["end_state"].items()}
             spent = spent[parent[order]] + np.where(np.isfinite(cost[order]), cost[order], 1e9)
-            dev, last = new_dev[order], acts[order, -1]
+            dev, last = seg["dev"][order], seg["acts"][order, -1]
             f += S
             if progress is not None:
                 progress(S)
@@ -305,3 +293,68 @@ class BeamTracker:
         path = {k: np.concatenate(v[::-1], axis=0) for k, v in parts.items()}
         path["off"] = np.stack(offsets[::-1])  # (segments, nu)
         return float(spent[0]), path, {k: np.concatenate(v) for k, v in demos.items()}
+
+    def _segment(
+        self,
+        beam: dict[str, np.ndarray],
+        dev: np.ndarray,
+        rows: np.ndarray,
+        last_row: int,
+        base: np.ndarray | float,
+        noise_scale: float,
+        rng: np.random.Generator,
+        mode: _Mode,
+    ) -> dict:
+        """One try at a segment: ``samples`` continuations of the beam's states through
+        reference ``rows``, each continued ``mode.lookahead`` steps and scored. Returns every
+        sample's ``parent``, ``dev``, ``off``, ``acts``/``qpos``/``qvel``/``body`` per step,
+        ``end_state``, ``cost``, ``error`` (mean body distance after the lookahead, m) and
+        ``order`` (the ``beam`` best, lowest cost first)."""
+        c, env = self.config, self.env
+        nu, K, S = env.layout.nu, c.samples, len(rows)
+        ref_q = env.reference.qpos64
+        nominal = self._nominal(np.minimum(rows + c.lead, last_row))
+        B = len(dev)
+        parent = rng.integers(0, B, K)
+        parent[: min(B, K)] = np.arange(min(B, K))
+        noise = rng.normal(size=(K, nu)) * mode.sigma * noise_scale
+        noise[rng.random(K) < c.quiet] = 0.0
+        new_dev = c.carry * dev[parent] + noise
+        off = base + new_dev
+        self.sim.load_state_dict({k: v[parent] for k, v in beam.items()})
+        acts = np.zeros((K, S, nu))
+        qpos = np.zeros((K, S, self.sim.raw("qpos").shape[1]))
+        qvel = np.zeros((K, S, self.sim.raw("qvel").shape[1]))
+        body = np.zeros((K, S, *self.sim.state.body_pos.shape[1:]))
+        bad = np.zeros(K, dtype=bool)
+        running = np.zeros(K)
+        for j in range(S):
+            angles = self.sim.raw("qpos")[:, self._aq]
+            fb = c.gain * (ref_q[rows[j]][self._aq][None] - angles) / self._scale
+            ff = self._feedforward(int(rows[j]))[None]
+            acts[:, j] = np.clip(nominal[j][None] + off + fb + ff, self._lo, self._hi)
+            bad |= self.sim.step(acts[:, j])
+            qpos[:, j], qvel[:, j] = self.sim.raw("qpos"), self.sim.raw("qvel")
+            body[:, j] = self.sim.state.body_pos.numpy()
+            if mode.running:
+                running += self._cost(int(rows[j]), mode.weights)[0] / S
+        end_state = self.sim.state_dict()
+        scored = rows[-1].item()
+        for _ in range(mode.lookahead):
+            row = min(scored + 1, last_row)
+            if row == scored:
+                break
+            angles = self.sim.raw("qpos")[:, self._aq]
+            fb = c.gain * (ref_q[row][self._aq][None] - angles) / self._scale
+            target = self._nominal(np.array([min(row + c.lead, last_row)]))[0]
+            ff = self._feedforward(row)[None]
+            bad |= self.sim.step(np.clip(target[None] + off + fb + ff, self._lo, self._hi))
+            scored = row
+        end_cost, error = self._cost(scored, mode.weights)
+        cost = (end_cost + mode.running * running
+                + mode.weights.effort * np.square(off).mean(-1))  # fmt: skip
+        cost[bad] = np.inf
+        return {"parent": parent, "dev": new_dev, "off": off, "acts": acts, "qpos": qpos,
+                "qvel": qvel, "body": body, "end_state": end_state, "cost": cost,
+                "error": np.where(bad, np.inf, error),
+                "order": np.argsort(cost, kind="stable")[: c.beam]}  # fmt: skip

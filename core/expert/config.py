@@ -20,6 +20,24 @@ class CostWeights(BaseModel):
     pose: float = Field(0.0, ge=0, description="mean root-relative distance of the bodies (m)")
 
 
+class Rescue(BaseModel):
+    """A second try at a segment whose best sample ends its lookahead far from the reference.
+
+    Settings that keep the pose tight (little noise, a pose term, a running cost) track walks
+    closest but lose runs, where a longer lookahead and plain costs keep the character up; a
+    rescue plans only the segments in trouble the robust way, so one planner has both."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    threshold: float = Field(0.0, ge=0, le=10, description="mean world distance of the "
+                             "bodies (m) of the best sample at the end of its lookahead above "
+                             "which the segment is planned again; 0 turns rescues off")
+    lookahead: int = Field(12, ge=0, le=72, description="the rescue's lookahead")
+    sigma: float = Field(0.2, ge=0, le=2, description="the rescue's offset noise")
+    pose: float = Field(0.0, ge=0, description="the rescue's weights.pose")
+    running: float = Field(0.0, ge=0, le=100, description="the rescue's running weight")
+
+
 class ExpertConfig(BaseModel):
     """Beam-search tracking over PD targets; the defaults were chosen on training-style walks
     (``benchmarks/results/expert_*.md`` has the comparisons)."""
@@ -59,3 +77,4 @@ class ExpertConfig(BaseModel):
                           "share of sigma")
     seed: int = Field(0, ge=0)
     weights: CostWeights = Field(default_factory=CostWeights)
+    rescue: Rescue = Field(default_factory=Rescue)

@@ -158,3 +158,18 @@ def test_velocity_feedforward_cancels_the_servo_damping(track) -> None:
     np.testing.assert_allclose(on._feedforward(row), want, rtol=1e-6, atol=1e-12)
     assert np.abs(want).max() > 0  # the idle clip moves: the check is not 0 == 0
     assert not off._feedforward(row).any()
+
+
+def test_a_rescue_plans_again_only_the_segments_in_trouble(track) -> None:
+    """``rescue.threshold`` re-plans a segment whose best sample ends its lookahead farther
+    than that from the reference: a threshold no sample can meet re-plans every segment, an
+    unreachable one none, and off (0, the default) counts none."""
+    env, plain = track
+    assert plain.rescued == 0 and plain.metrics()["rescued_segments"] == 0
+    always = BeamTracker(env, ExpertConfig(**SMALL, rescue={"threshold": 1e-6, "lookahead": 3}))
+    tr = always.track(0, seconds=0.5)
+    segments = -(-(tr.frames - 1) // ExpertConfig().segment)
+    assert tr.rescued == segments == always.rescues
+    assert tr.metrics()["success_clip"]
+    never = BeamTracker(env, ExpertConfig(**SMALL, rescue={"threshold": 5.0}))
+    assert never.track(0, seconds=0.5).rescued == 0
