@@ -37,7 +37,8 @@ KINDS = {
 }  # fmt: skip
 FIGURES = ("phc_success", "phc_mpjpe_mm", "phc_g_mpjpe_mm", "phc_pa_mpjpe_mm",
            "phc_accel_mm_f2", "phc_vel_mm_f", "phc_g_mpjpe_mm_succ", "success_frame",
-           "falls_per_min", "headset_cm", "controller_cm", "mpjpe_mm", "runs")  # fmt: skip
+           "falls_per_min", "headset_cm", "controller_cm", "hands_to_controllers_cm",
+           "mpjpe_mm", "runs")  # fmt: skip
 
 
 def corpus_files(style: str, kind: str, max_clips: int | None) -> list[Path]:

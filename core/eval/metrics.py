@@ -53,6 +53,18 @@ def head_to_headset(ctx: StepContext, head: int) -> torch.Tensor:
     return (ctx.sim.site_pos[:, head] - headset).norm(dim=-1)
 
 
+def hands_to_controllers(ctx: StepContext, hands: list[int]) -> torch.Tensor:
+    """Mean distance from each environment's simulated hand sites (where a controller is
+    held) to the two controllers it was given at this frame, metres ``(N,)``.
+
+    Beside ``controller_cm`` (hands against the reference *character's* hands) this is what a
+    VR user sees: the controllers come from the person, whose arms need not have the
+    character's proportions, so a character can match its reference and still hold its hands
+    away from the person's."""
+    controllers = ctx.ref.devices[:, ctx.ref.window_offsets.index(0), 1:3, :3]
+    return (ctx.sim.site_pos[:, hands] - controllers).norm(dim=-1).mean(-1)
+
+
 @dataclass
 class StepMetrics:
     """Metrics of one step for every environment, all (N,) float tensors (metres, radians)."""
@@ -73,6 +85,7 @@ class StepMetrics:
     penetration_max: torch.Tensor | None = None  # metres, deepest overlap this step
     penetration_mean: torch.Tensor | None = None  # metres, mean over overlapping contacts
     feet_pos: torch.Tensor | None = None  # metres, mean position error of the feet bodies
+    hand_gap: torch.Tensor | None = None  # metres, hands to the given controllers
 
 
 class MetricProbe:
@@ -121,6 +134,8 @@ class MetricProbe:
         skate = (speed * feet_down).sum(-1) / feet_down.sum(-1).clamp_min(1)
         out = StepMetrics(hmd, hmd_rot, ctrl.mean(-1), device_mean, head_gap, agree, skate)
         out.feet_pos = (s.body_pos[:, self.feet] - r.body_pos[:, self.feet]).norm(dim=-1).mean(-1)
+        if ctx.ref.devices.shape[2] >= 3:
+            out.hand_gap = hands_to_controllers(ctx, self.hands)
         labels = ctx.ref.scene_contacts
         if labels is not None and self.link_columns.numel():
             up = s.contact_force_up[:, self.link_bodies] @ self.link_member

@@ -197,6 +197,8 @@ def standard_terms(
         ("hmd_rot", "headset_deg", DEG),
         ("controller_pos", "controller_cm", CM),
         ("feet_pos", "feet_cm", CM),
+        ("head_to_headset", "head_to_headset_cm", CM),
+        ("hand_gap", "hands_to_controllers_cm", CM),
         ("g_mpjpe", "g_mpjpe_mm", MM),
         ("mpjpe", "mpjpe_mm", MM),
         ("pa_mpjpe", "pa_mpjpe_mm", MM),

@@ -127,3 +127,6 @@ def test_limb_errors_are_reported_for_hands_and_feet() -> None:
     overall = report["overall"]
     assert 0.0 <= overall["feet_cm"] < 30.0 and 0.0 <= overall["controller_cm"] < 60.0
     assert list(overall).index("feet_cm") == list(overall).index("controller_cm") + 1
+    # the human character holds its hands at the controllers of the clip it stands in
+    assert 0.0 < overall["hands_to_controllers_cm"] < 60.0
+    assert 0.0 < overall["head_to_headset_cm"] < 60.0
