@@ -94,7 +94,12 @@ def _driven_by(rec: DeviceRecording, path: str, registry: Registry, args: argpar
     first = int(lib.start[0]) + lead
     rows = first + torch.arange(len(stream))
     start_hmd = lib.devices[first, 0].double().numpy()
-    lib.devices[rows] = torch.as_tensor(align_to(stream, start_hmd), dtype=lib.devices.dtype)
+    scale = loaded.env.options.devices == "character"
+    try:
+        aligned = align_to(stream, start_hmd, scale=scale)
+    except ValueError as exc:
+        raise RetargetError(f"{args.input}: {exc}") from None
+    lib.devices[rows] = torch.as_tensor(aligned, dtype=lib.devices.dtype)
     last = first + len(stream) - 1
     lib.devices[last + 1 : int(lib.start[0]) + int(lib.length[0])] = lib.devices[last]
     args.seconds = min(args.seconds, (len(stream) - 1) / hz)

@@ -69,6 +69,7 @@ class LiveSession:
                              torch.tensor([self.frame0]), tuple(env.window_offsets))[0]  # fmt: skip
         start = lib.devices[self.rows[-1]].double().numpy()  # (3, 7) at the pinned frame
         self.start_headset = start[0]
+        self.scaled = env.options.devices == "character"  # devices at the character's size
         # standing history, one frame behind: each step shifts it and appends the newest
         before = lib.rows(torch.zeros(1, dtype=torch.long), torch.tensor([self.frame0 - 1]),
                           tuple(env.window_offsets))[0]  # fmt: skip
@@ -94,7 +95,8 @@ class LiveSession:
         if self.calibration is None:
             if not tracked[0]:
                 return  # calibrate on the first sample that has the headset
-            self.calibration = Calibration.between(here[0], self.start_headset)
+            self.calibration = Calibration.between(here[0], self.start_headset,
+                                                   scale=self.scaled)  # fmt: skip
             self.first = here.copy()
             self.held = here.copy()
         self.held = np.where(tracked[:, None], here, self.held)
@@ -106,7 +108,8 @@ class LiveSession:
         self.used = self.latest
         if self.latest is not None and self.first is not None:
             # the same calibration as a recording's (align_to), so live equals play --input
-            current = align_to(np.stack([self.first, self.latest.poses]), self.start_headset)[1]
+            current = align_to(np.stack([self.first, self.latest.poses]), self.start_headset,
+                               scale=self.scaled)[1]
         else:
             current = self.window[-1]
         self.window = np.concatenate([self.window[1:], current[None]], axis=0)

@@ -4,7 +4,9 @@ A recording (:mod:`retarget.motion.device_recording`) has its own clock and its 
 origin. To drive an environment it is resampled to the control rate (positions linearly,
 rotations by slerp; untracked samples hold the last tracked pose, as a headset runtime does)
 and calibrated like a VR application calibrates its avatar: translated and turned about the
-vertical so that the first headset pose stands where the character starts.
+vertical so that the first headset pose stands where the character starts, and, for a run whose
+devices are at the character's scale (``env.devices: character``), scaled by the ratio of the
+character's standing headset height to the user's first one (the user stands at the start).
 """
 
 from __future__ import annotations
@@ -44,14 +46,36 @@ def resample_stream(rec: DeviceRecording, hz: float) -> np.ndarray:
     return np.concatenate([pos, quat], axis=-1)
 
 
-def align_to(poses: np.ndarray, hmd: np.ndarray) -> np.ndarray:
+MIN_HEADSET, MAX_SCALE = 0.3, 4.0
+"""A first headset pose below 0.3 m, or a scale beyond 1/4..4, is not a standing user."""
+
+
+def height_scale(first_hmd: np.ndarray, hmd: np.ndarray) -> float:
+    """How much larger than the user the character's reference is: the height of ``hmd`` (the
+    character's standing headset) over that of the user's first headset pose ``first_hmd``."""
+    user, own = float(first_hmd[2]), float(hmd[2])
+    scale = own / user if user > MIN_HEADSET else float("nan")
+    if not 1.0 / MAX_SCALE <= scale <= MAX_SCALE:
+        raise ValueError(
+            f"the first headset pose is {user:.2f} m above the floor, the character's standing "
+            f"headset {own:.2f} m: calibrating the avatar's size needs the user standing at the "
+            "start (headset heights in metres, z or y up as the convention says)"
+        )
+    return scale
+
+
+def align_to(poses: np.ndarray, hmd: np.ndarray, *, scale: bool = False) -> np.ndarray:
     """Move the stream rigidly (vertical-axis rotation + horizontal translation) so that its
     first headset pose has the horizontal position and heading of ``hmd`` (7,). Heights are
-    kept: they are the user's real heights above the floor."""
+    kept (the user's real heights above the floor) unless ``scale``: then every position is
+    also scaled about the floor under that first pose by :func:`height_scale`, so that the
+    first headset is at ``hmd``'s height and a step of the user is a step of the character."""
     yaw = float(rot.yaw(hmd[3:]) - rot.yaw(poses[0, 0, 3:]))
     turn = rot.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.array(yaw))
     origin = poses[0, 0, :3] * np.array([1.0, 1.0, 0.0])
     pos = rot.apply(np.broadcast_to(turn, (*poses.shape[:-1], 4)), poses[..., :3] - origin)
+    if scale:
+        pos = pos * height_scale(poses[0, 0], hmd)
     pos[..., :2] += hmd[:2]
     quat = rot.mul(np.broadcast_to(turn, poses[..., 3:].shape), poses[..., 3:])
     return np.concatenate([pos, rot.normalize(quat)], axis=-1)

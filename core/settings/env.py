@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -63,6 +63,15 @@ class EnvOptions(BaseModel):
         None,
         description="start episodes where recent failures happened, with a uniform share "
         "(null: frame-uniform starts); e.g. {uniform: 0.5, bin_seconds: 2}",
+    )
+    devices: Literal["person", "character"] = Field(
+        "person",
+        description="where the headset and controllers of a clip are: 'character' scales "
+        "them with the clip to the character's size, as its reference is (the devices sit on "
+        "the reference's head and hands whoever performed the clip; live streams are scaled "
+        "by the user's height, calibrated on the first headset pose); 'person' leaves them at "
+        "the performer's size, so on a performer shorter or taller than the character they "
+        "drift from the reference with every metre walked (runs recorded before this field)",
     )
     root_assist: RootAssistOptions | None = Field(
         None,

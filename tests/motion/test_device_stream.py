@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from retarget.geometry import rotations as rot
 from retarget.motion.device_recording import DeviceRecording
@@ -55,3 +56,29 @@ def test_calibration_puts_the_first_headset_on_the_target_and_keeps_the_geometry
     dist_aligned = np.linalg.norm(aligned[:, :, None, :3] - aligned[:, None, :, :3], axis=-1)
     np.testing.assert_allclose(dist_aligned, dist, atol=1e-9)
     np.testing.assert_allclose(np.linalg.norm(aligned[..., 3:], axis=-1), 1.0, atol=1e-12)
+
+
+def test_scaled_calibration_puts_the_user_at_the_characters_size() -> None:
+    """With ``scale`` (runs with ``env.devices: character``) the first headset lands at the
+    target's height too and every distance grows by the same ratio; the live calibration maps
+    the room in and back out by it; a user who is not standing at the start is refused."""
+    from retarget.live.calibration import Calibration
+    from retarget.motion.device_stream import height_scale
+
+    poses = resample_stream(recording(), 36.0)
+    target = np.concatenate([[3.0, -1.0, 2.0], rot.from_axis_angle(Z, np.array(2.0))])
+    aligned = align_to(poses, target, scale=True)
+    k = 2.0 / poses[0, 0, 2]
+    assert height_scale(poses[0, 0], target) == k and k != 1.0
+    np.testing.assert_allclose(aligned[0, 0, :3], target[:3], atol=1e-9)
+    np.testing.assert_allclose(aligned[..., 2], k * poses[..., 2], atol=1e-12)
+    dist = np.linalg.norm(poses[:, :, None, :3] - poses[:, None, :, :3], axis=-1)
+    dist_aligned = np.linalg.norm(aligned[:, :, None, :3] - aligned[:, None, :, :3], axis=-1)
+    np.testing.assert_allclose(dist_aligned, k * dist, atol=1e-9)
+    cal = Calibration.between(poses[0, 0], target, scale=True)
+    np.testing.assert_allclose(cal.to_world(poses[-1]), aligned[-1], atol=1e-9)
+    np.testing.assert_allclose(cal.to_room(cal.to_world(poses[-1])), poses[-1], atol=1e-9)
+    sitting = poses[0, 0].copy()
+    sitting[2] = 0.1
+    with pytest.raises(ValueError, match="standing"):
+        height_scale(sitting, target)

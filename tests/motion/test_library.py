@@ -87,3 +87,24 @@ def test_bad_weights(clips):
         MotionLibrary(clips[:2], weights=[0, 0])
     with pytest.raises(ValueError):
         MotionLibrary([])
+
+
+def test_devices_at_the_characters_scale_stay_on_its_reference() -> None:
+    """A walk by a person 0.9 times the character's size: with ``env.devices: character`` the
+    headset keeps one distance from the reference's head site all the way (the mount offset);
+    at the person's size it falls behind with every metre walked."""
+    from plugins.characters.human import Human
+    from retarget.character.kinematic import scaled_clip
+    from retarget.env.env import RetargetEnv
+    from retarget.motion.procedural import default_motions
+    from retarget.settings.env import EnvOptions
+
+    walk = scaled_clip(default_motions(names=("walk",))[0], 0.9)
+    gap = {}
+    for mode in ("person", "character"):
+        env = RetargetEnv(Human(), [walk], options=EnvOptions(num_envs=1, devices=mode))
+        head = env.reference.arrays["site_pos"][:, env.layout.site("head")]
+        gap[mode] = (head - env.library.devices[:, 0, :3]).norm(dim=-1)
+    assert float(gap["character"].max() - gap["character"].min()) < 0.01
+    assert float(gap["character"].max()) < 0.08
+    assert float(gap["person"][-1]) > float(gap["person"][0]) + 0.4  # ~8 m walked x 0.1
