@@ -83,9 +83,11 @@ def root_height_ratio(model: mujoco.MjModel, clip: MotionClip) -> float:
 def scaled_clip(clip: MotionClip, scale: float) -> MotionClip:
     """The clip as a person ``scale`` times the size would perform it about the world origin
     (root path and bones scaled): where the character's reference goes, so props placed from
-    it (or given in the clip's frame and scaled by ``meta["scale"]``) fit the character."""
+    it (or given in the clip's frame and scaled by ``meta["scale"]``, the product of every
+    scaling so far) fit the character."""
+    total = float(clip.meta.get("scale", 1.0)) * scale  # type: ignore[arg-type]
     return clip.with_(root_pos=clip.root_pos * scale, offsets=clip.offsets * scale,
-                      meta={**clip.meta, "scale": scale})  # fmt: skip
+                      meta={**clip.meta, "scale": total})  # fmt: skip
 
 
 @dataclass

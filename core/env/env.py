@@ -83,9 +83,10 @@ class RetargetEnv:
         self.layout = layout = self.world.layout
         hz = sim.control_hz
         clips = [resample(c, hz) for c in clips]
-        scales = ([root_height_ratio(self.world.model, c) for c in clips]
-                  if opts.devices == "character" else None)  # fmt: skip
-        self.library = MotionLibrary(clips, fps=hz, device_scales=scales)
+        if opts.devices == "character":  # the person at the size the reference is retargeted
+            # at: devices, ego views and estimator targets then sit on the reference's body
+            clips = [scaled_clip(c, root_height_ratio(self.world.model, c)) for c in clips]
+        self.library = MotionLibrary(clips, fps=hz)
         self._mocap_ids = self._scene_mocap_ids()
         self.reference = CharacterReference(character, self.world.model, layout, clips,
                                             mocap=self._clip_placements(len(clips)))  # fmt: skip

@@ -37,12 +37,7 @@ FIELDS = ("root_pos", "local_rot", "global_pos", "global_rot", "devices", "conta
 
 
 class MotionLibrary:
-    """Clips at one frame rate as flat tensors plus per-clip ``start``/``length``/``weight``.
-
-    ``device_scales`` (one per clip, default 1) puts each clip's headset and controllers where
-    a person that many times the size would hold them: the scale the character's reference is
-    retargeted at, so that a policy sees the devices where its own reference's head and hands
-    are, whoever performed the clip (``env.devices: character``)."""
+    """Clips at one frame rate as flat tensors plus per-clip ``start``/``length``/``weight``."""
 
     def __init__(
         self,
@@ -53,20 +48,15 @@ class MotionLibrary:
         mirrored: bool = False,
         device: str | torch.device = "cpu",
         dtype: torch.dtype = torch.float32,
-        device_scales: Sequence[float] | None = None,
     ) -> None:
         if not clips:
             raise ValueError("a motion library needs at least one clip")
         w = [1.0] * len(clips) if weights is None else [float(x) for x in weights]
         if len(w) != len(clips) or min(w) < 0 or sum(w) <= 0:
             raise ValueError("weights must be one non-negative number per clip, not all zero")
-        if device_scales is not None and len(device_scales) != len(clips):
-            raise ValueError("device_scales must be one number per clip")
-        scales = [1.0] * len(clips) if device_scales is None else [float(s) for s in device_scales]
         items = [resample(c, fps) for c in clips]
         if mirrored:
             items = items + [mirror(c) for c in items]
-            scales = scales + scales
             w = w + w
         self.fps = float(fps)
         self.names = [c.name for c in items]
@@ -83,10 +73,7 @@ class MotionLibrary:
         self.local_rot = t(cat(lambda c: c.local_rot))
         self.global_pos = t(cat(lambda c: c.global_pos))
         self.global_rot = t(cat(lambda c: c.global_rot))
-        # devices of the person scaled by the clip's device scale about the world origin (the
-        # path and bones scaled, as retarget.character.kinematic.scaled_clip does)
-        self.devices = t(np.concatenate([device_poses(c.global_pos * s, c.global_rot, c.height * s)
-                                         for c, s in zip(items, scales, strict=True)]))  # fmt: skip
+        self.devices = t(cat(lambda c: device_poses(c.global_pos, c.global_rot, c.height)))
         self.contacts = t(cat(lambda c: c.contacts), torch.bool)
         self.heights = t(np.array([c.height for c in items]))
         self.start = t(starts, torch.long)

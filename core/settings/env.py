@@ -66,12 +66,13 @@ class EnvOptions(BaseModel):
     )
     devices: Literal["person", "character"] = Field(
         "person",
-        description="where the headset and controllers of a clip are: 'character' scales "
-        "them with the clip to the character's size, as its reference is (the devices sit on "
-        "the reference's head and hands whoever performed the clip; live streams are scaled "
-        "by the user's height, calibrated on the first headset pose); 'person' leaves them at "
-        "the performer's size, so on a performer shorter or taller than the character they "
-        "drift from the reference with every metre walked (runs recorded before this field)",
+        description="the size of the person whose devices a policy reads: 'character' scales "
+        "each clip (path and bones) to the size its reference is retargeted at, so headset, "
+        "controllers, headset views and estimator targets sit on the reference's body "
+        "whoever performed the clip (live streams are scaled by the user's height, calibrated "
+        "on the first headset pose); 'person' keeps the performer's size, so on a performer "
+        "shorter or taller than the character the devices drift from the reference with "
+        "every metre walked (runs recorded before this field)",
     )
     root_assist: RootAssistOptions | None = Field(
         None,

@@ -100,11 +100,17 @@ def test_devices_at_the_characters_scale_stay_on_its_reference() -> None:
     from retarget.settings.env import EnvOptions
 
     walk = scaled_clip(default_motions(names=("walk",))[0], 0.9)
-    gap = {}
+    assert walk.meta["scale"] == 0.9
+    gap, body = {}, {}
     for mode in ("person", "character"):
         env = RetargetEnv(Human(), [walk], options=EnvOptions(num_envs=1, devices=mode))
         head = env.reference.arrays["site_pos"][:, env.layout.site("head")]
         gap[mode] = (head - env.library.devices[:, 0, :3]).norm(dim=-1)
+        pelvis = env.reference.arrays["body_pos"][:, 0]  # the person's body goes with them
+        body[mode] = (pelvis - env.library.global_pos[:, 0]).norm(dim=-1)
+        if mode == "character":  # scalings compose: 0.9 and back up to the character's size
+            assert float(env.library.heights[0]) == pytest.approx(1.75, abs=0.05)
     assert float(gap["character"].max() - gap["character"].min()) < 0.01
-    assert float(gap["character"].max()) < 0.08
+    assert float(gap["character"].max()) < 0.08 and float(body["character"].max()) < 0.01
     assert float(gap["person"][-1]) > float(gap["person"][0]) + 0.4  # ~8 m walked x 0.1
+    assert float(body["person"][-1]) > 0.4
