@@ -88,7 +88,7 @@ def _gear(m, name: str) -> float:
 
 
 def test_table4_torque_scales() -> None:
-    _, dino = _compiled(Dino)
+    _, dino = _compiled(Dino, max_torque=300.0)  # the paper's Table 3 limit
     assert _gear(dino, "l_shoulder_x") == pytest.approx(60.0)  # 0.2 * 300
     assert _gear(dino, "r_elbow") == pytest.approx(30.0)  # 0.1
     assert _gear(dino, "head_y") == pytest.approx(30.0) and _gear(dino, "neck_z") == 30.0
@@ -103,6 +103,9 @@ def test_table4_torque_scales() -> None:
     assert np.max(oppy.actuator_gear[:, 0]) == pytest.approx(40.0)
     assert _gear(oppy, "neck_x") == pytest.approx(4.0)
     assert all(oppy.actuator_forcerange[:, 1] == oppy.actuator_gear[:, 0])
+    _, heavy = _compiled(Dino)  # the default: scaled for a body of 180 kg that can stand
+    assert _gear(heavy, "l_knee") == pytest.approx(900.0)
+    assert _gear(heavy, "tail0_z") == pytest.approx(450.0)
 
 
 @pytest.mark.parametrize(
