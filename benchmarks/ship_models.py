@@ -72,6 +72,9 @@ def main() -> int:
     parser.add_argument("--notes", default="")
     parser.add_argument("--plus-card", metavar="NAME", help="a run started --init-from this "
                         "shipped model: its card's samples and CPU-hours are added to the run's")
+    parser.add_argument("--plus-run", action="append", default=[], metavar="RUN",
+                        help="a run between that shipped model and this one in a chain of "
+                        "--init-from starts: its samples and CPU-hours are added too")
     parser.add_argument("--no-state", action="store_true", help="package only: leave "
                         "benchmarks/pretrain/NAME as it is (a snapshot of a run still training)")
     args = parser.parse_args()
@@ -84,6 +87,10 @@ def main() -> int:
 
         before = card_of(args.plus_card)
         before_steps, before_hours = before.env_steps, before.cpu_hours
+    for between in args.plus_run:
+        last = last_row(resolve_run(between))
+        before_steps += int(float(last["step"]))
+        before_hours += float(last["elapsed_s"]) / 3600 * args.cores
     metrics: dict[str, dict[str, float]] = {}
     if args.heldout:
         found = json.loads(args.heldout.read_text())
