@@ -127,7 +127,8 @@ def draw_ghost(server, joints: np.ndarray, devices: np.ndarray | None = None,
     (re-adding a node under the same name replaces it)."""
     scene = server.scene
     segments = np.stack([joints[list(sk.PARENTS[1:])], joints[1:]], axis=1).astype(np.float32)
-    scene.add_line_segments(f"{prefix}/ghost", segments, colors=GHOST, line_width=4.0)
+    scene.add_line_segments(f"{prefix}/ghost", segments, colors=GHOST, thickness=4.0,
+                             thickness_units="screen")
     for d in range(0 if devices is None else len(devices)):
         assert devices is not None
         scene.add_box(f"{prefix}/device{d}", color=DEVICE, dimensions=(0.06, 0.06, 0.06),
