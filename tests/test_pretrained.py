@@ -156,3 +156,27 @@ def test_follow_summary_names_when_the_headset_was_lost() -> None:
     assert "followed to the end" in follow_summary([0.1, 0.2, 0.3], 36.0)
     lost = follow_summary([0.1] * 36 + [0.6, 0.2], 36.0)
     assert "lost it at 1.0 s" in lost and "60 cm max" in lost
+
+
+def test_a_run_locked_before_env_devices_keeps_the_performers_size(tmp_path: Path) -> None:
+    """A lock without ``env.devices`` (written before the field) reads as ``person``, what its
+    devices were when it trained; a new recipe without it gets ``character``."""
+    import shutil
+
+    import yaml
+
+    from retarget.recipe import load
+    from retarget.train.load import locked_recipe
+
+    registry = load_plugins()
+    run = tmp_path / "old"
+    shutil.copytree(pretrained.model_dir("human-three_point-estimator"), run)
+    text = (run / "recipe.lock.yaml").read_text()
+    assert "devices" not in yaml.safe_load(text)["env"]
+    assert locked_recipe(run, registry)[0].recipe.env.devices == "person"
+    new = text.replace("\nenv:\n", "\nenv:\n  devices: character\n")
+    (run / "recipe.lock.yaml").write_text(new)
+    assert locked_recipe(run, registry)[0].recipe.env.devices == "character"
+    fresh = tmp_path / "fresh.yaml"
+    fresh.write_text("extends: null\ncharacter: human\nsensors: [three_point]\n")
+    assert load(str(fresh), registry).recipe.env.devices == "character"

@@ -128,7 +128,11 @@ class LiveServer:
             self._bad(conn, "order", f"out of order: t {msg.t} after {me.last_t}")
             return
         me.last_t = msg.t
-        self.session.push(msg.t, msg.poses, msg.tracked, me.convention, msg.images, me.rig)
+        try:
+            self.session.push(msg.t, msg.poses, msg.tracked, me.convention, msg.images, me.rig)
+        except ValueError as exc:  # calibration refused (a user not standing at the start)
+            self._bad(conn, "calibration", f"calibration: {exc}")
+            return
         self.stats.samples += 1
         self._arrived.set()
 

@@ -65,14 +65,14 @@ class EnvOptions(BaseModel):
         "(null: frame-uniform starts); e.g. {uniform: 0.5, bin_seconds: 2}",
     )
     devices: Literal["person", "character"] = Field(
-        "person",
+        "character",
         description="the size of the person whose devices a policy reads: 'character' scales "
         "each clip (path and bones) to the size its reference is retargeted at, so headset, "
         "controllers, headset views and estimator targets sit on the reference's body "
         "whoever performed the clip (live streams are scaled by the user's height, calibrated "
         "on the first headset pose); 'person' keeps the performer's size, so on a performer "
         "shorter or taller than the character the devices drift from the reference with "
-        "every metre walked (runs recorded before this field)",
+        "every metre walked (what a run recorded before this field meant: its lock is read so)",
     )
     root_assist: RootAssistOptions | None = Field(
         None,

@@ -42,6 +42,9 @@ def locked_recipe(
     lock = yaml.safe_load(text).get(LOCK_SECTION) or {}
     if not isinstance(lock, dict):
         raise RecipeError(f"'{LOCK_SECTION}' must be a mapping", file=str(path))
+    env = source.data.get("env")
+    if isinstance(env, dict) and "devices" not in env:  # locked before env.devices existed:
+        env["devices"] = "person"  # its devices were at the performer's size
     source = apply_overrides(source, shorthands={"scene": scene}, assignments=assignments)
     return resolve(source, registry), lock
 

@@ -90,7 +90,8 @@ def test_bad_messages_are_counted_and_a_disconnect_frees_the_driver_seat(run) ->
         got: dict = {"errors": [], "poses": 0}
         async with connect(url) as a:
             await a.send(json.dumps({"type": "hello", "role": "driver"}))
-            for bad in ("not json", "[1, 2]", json.dumps({"type": "dance"}),
+            sitting = {**sample, "t": 0.2, "hmd": [0, 0, 0.1, 1, 0, 0, 0]}  # not standing
+            for bad in (json.dumps(sitting), "not json", "[1, 2]", json.dumps({"type": "dance"}),
                         json.dumps({**sample, "hmd": [0, 0, 1]}),
                         json.dumps({**sample, "hmd": [0, 0, 1e6, 1, 0, 0, 0]}),
                         json.dumps({"type": "hello", "role": "boss"}),
@@ -113,7 +114,7 @@ def test_bad_messages_are_counted_and_a_disconnect_frees_the_driver_seat(run) ->
                     got["errors"].append(msg["message"])
                 elif msg["type"] == "pose":
                     got["poses"] += 1
-                if len(got["errors"]) >= 9 and got["poses"] >= 3:
+                if len(got["errors"]) >= 10 and got["poses"] >= 3:
                     break
         async with connect(url) as c:  # the seat is free again
             await c.send(json.dumps({"type": "hello", "role": "driver"}))
@@ -124,11 +125,13 @@ def test_bad_messages_are_counted_and_a_disconnect_frees_the_driver_seat(run) ->
     with Running(run) as live:
         got = asyncio.run(session(live.url))
         summary = live.server.stats.summary()
-    assert sum(summary["bad_messages"].values()) == 9, summary
+    assert sum(summary["bad_messages"].values()) == 10, summary
     assert got["poses"] >= 3, "the server kept stepping and answering"
     assert "another client drives" in got["second"]
     assert got["again"] == "driver"
     assert any("out of order" in e for e in got["errors"])
+    assert any("standing" in e for e in got["errors"]), "a sitting start is refused, then "\
+        "the standing samples calibrate"
 
 
 def test_the_session_follows_a_recording_as_play_input_does(run) -> None:
