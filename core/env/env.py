@@ -74,18 +74,22 @@ class RetargetEnv:
         if scene is None:  # the floor alone: every environment has a scene
             scene = Ground()
         self.character, self.scene = character, scene
-        if type(scene).fit_motion is not Scene.fit_motion:  # props placed from the motions
-            # come before the build, at the character's scale (its reference root path is
-            # scaled by the same ratio); scaling every clip is skipped for scenes that do not
+        fits = type(scene).fit_motion is not Scene.fit_motion
+        if fits or opts.devices == "character":
+            # the clips as a person of the character's size performs them (its reference root
+            # path is scaled by the same ratio): props placed from the motions come before the
+            # build, and with devices at the character's size the library holds these clips,
+            # so devices, headset views and estimator targets sit on the reference's body
             rest = character.build_spec().compile()
-            scene.fit_motion([scaled_clip(c, root_height_ratio(rest, c)) for c in clips])
+            scaled = [scaled_clip(c, root_height_ratio(rest, c)) for c in clips]
+            if fits:
+                scene.fit_motion(scaled)
+            if opts.devices == "character":
+                clips = scaled
         self.world = build_world(character, scene)
         self.layout = layout = self.world.layout
         hz = sim.control_hz
         clips = [resample(c, hz) for c in clips]
-        if opts.devices == "character":  # the person at the size the reference is retargeted
-            # at: devices, ego views and estimator targets then sit on the reference's body
-            clips = [scaled_clip(c, root_height_ratio(self.world.model, c)) for c in clips]
         self.library = MotionLibrary(clips, fps=hz)
         self._mocap_ids = self._scene_mocap_ids()
         self.reference = CharacterReference(character, self.world.model, layout, clips,

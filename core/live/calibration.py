@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from retarget.geometry import rotations as rot
+from retarget.motion.device_stream import height_scale, move_poses
 
 
 @dataclass(frozen=True)
@@ -31,8 +32,6 @@ class Calibration:
     ) -> Calibration:
         """The motion taking ``first_headset`` (7,) to ``start_headset``'s place and heading
         (and, with ``scale``, height)."""
-        from retarget.motion.device_stream import height_scale
-
         yaw = float(rot.yaw(start_headset[3:]) - rot.yaw(first_headset[3:]))
         k = height_scale(first_headset, start_headset) if scale else 1.0
         return cls(yaw, np.asarray(first_headset[:2], float), np.asarray(start_headset[:2], float),
@@ -40,24 +39,8 @@ class Calibration:
 
     def to_world(self, poses: np.ndarray) -> np.ndarray:
         """Room poses ``(..., 7)`` into the character's world."""
-        return _move(poses, self.yaw, self.origin, self.target, self.scale)
+        return move_poses(poses, self.yaw, self.origin, self.target, self.scale)
 
     def to_room(self, poses: np.ndarray) -> np.ndarray:
         """World poses ``(..., 7)`` back into the user's room."""
-        return _move(poses, -self.yaw, self.target, self.origin, 1.0 / self.scale)
-
-
-def _move(
-    poses: np.ndarray, yaw: float, origin: np.ndarray, target: np.ndarray, scale: float = 1.0
-) -> np.ndarray:
-    """Turn poses ``(..., 7)`` by ``yaw`` about +Z around ``origin`` (xy), scale positions by
-    ``scale`` about the floor under it and put ``origin`` at ``target``."""
-    c, s = np.cos(yaw), np.sin(yaw)
-    m = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    q = rot.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.array(yaw))
-    pos = poses[..., :3].copy()
-    pos[..., :2] -= origin
-    pos = pos @ m.T * scale
-    pos[..., :2] += target
-    quat = rot.mul(np.broadcast_to(q, poses[..., 3:].shape), poses[..., 3:])
-    return np.concatenate([pos, rot.normalize(quat)], axis=-1)
+        return move_poses(poses, -self.yaw, self.target, self.origin, 1.0 / self.scale)

@@ -21,7 +21,6 @@ from retarget.errors import RetargetError
 from retarget.kinds.capabilities import Acting, Exportable, require
 from retarget.live.calibration import Calibration
 from retarget.motion.device_recording import convert
-from retarget.motion.device_stream import align_to
 
 
 @dataclass
@@ -77,7 +76,6 @@ class LiveSession:
         env.place(torch.zeros(1, dtype=torch.long), torch.tensor([self.frame0]))
         self.held = start.copy()  # room frame after calibration; world before the first sample
         self.calibration: Calibration | None = None
-        self.first: np.ndarray | None = None  # the first sample, where calibration starts
         self.latest: Latest | None = None
         self.used: Latest | None = None
         self.steps = 0
@@ -97,7 +95,6 @@ class LiveSession:
                 return  # calibrate on the first sample that has the headset
             self.calibration = Calibration.between(here[0], self.start_headset,
                                                    scale=self.scaled)  # fmt: skip
-            self.first = here.copy()
             self.held = here.copy()
         self.held = np.where(tracked[:, None], here, self.held)
         self.latest = Latest(t, self.held.copy(), tracked.copy(), time.perf_counter(), images)
@@ -106,10 +103,9 @@ class LiveSession:
         """One control step with the newest sample; the body in the world frame."""
         env, lib = self.env, self.env.library
         self.used = self.latest
-        if self.latest is not None and self.first is not None:
-            # the same calibration as a recording's (align_to), so live equals play --input
-            current = align_to(np.stack([self.first, self.latest.poses]), self.start_headset,
-                               scale=self.scaled)[1]
+        if self.latest is not None and self.calibration is not None:
+            # the mapping a recording gets (align_to: move_poses), so live equals play --input
+            current = self.calibration.to_world(self.latest.poses)
         else:
             current = self.window[-1]
         self.window = np.concatenate([self.window[1:], current[None]], axis=0)

@@ -71,11 +71,23 @@ def align_to(poses: np.ndarray, hmd: np.ndarray, *, scale: bool = False) -> np.n
     also scaled about the floor under that first pose by :func:`height_scale`, so that the
     first headset is at ``hmd``'s height and a step of the user is a step of the character."""
     yaw = float(rot.yaw(hmd[3:]) - rot.yaw(poses[0, 0, 3:]))
-    turn = rot.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.array(yaw))
-    origin = poses[0, 0, :3] * np.array([1.0, 1.0, 0.0])
-    pos = rot.apply(np.broadcast_to(turn, (*poses.shape[:-1], 4)), poses[..., :3] - origin)
-    if scale:
-        pos = pos * height_scale(poses[0, 0], hmd)
-    pos[..., :2] += hmd[:2]
-    quat = rot.mul(np.broadcast_to(turn, poses[..., 3:].shape), poses[..., 3:])
+    k = height_scale(poses[0, 0], hmd) if scale else 1.0
+    return move_poses(poses, yaw, poses[0, 0, :2], hmd[:2], k)
+
+
+def move_poses(
+    poses: np.ndarray, yaw: float, origin: np.ndarray, target: np.ndarray, scale: float = 1.0
+) -> np.ndarray:
+    """Turn poses ``(..., 7)`` by ``yaw`` about +Z around ``origin`` (xy), scale positions by
+    ``scale`` about the floor under it and put ``origin`` at ``target``: the one room-to-world
+    mapping of a recording (:func:`align_to`) and of a live session
+    (:class:`retarget.live.calibration.Calibration`, both ways)."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    m = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    q = rot.from_axis_angle(np.array([0.0, 0.0, 1.0]), np.array(yaw))
+    pos = poses[..., :3].copy()
+    pos[..., :2] -= origin
+    pos = pos @ m.T * scale
+    pos[..., :2] += target
+    quat = rot.mul(np.broadcast_to(q, poses[..., 3:].shape), poses[..., 3:])
     return np.concatenate([pos, rot.normalize(quat)], axis=-1)
