@@ -180,3 +180,24 @@ def test_a_run_locked_before_env_devices_keeps_the_performers_size(tmp_path: Pat
     fresh = tmp_path / "fresh.yaml"
     fresh.write_text("extends: null\ncharacter: human\nsensors: [three_point]\n")
     assert load(str(fresh), registry).recipe.env.devices == "character"
+
+
+def test_a_run_locked_before_motions_level_feet_keeps_its_tilted_feet(tmp_path: Path) -> None:
+    """A lock without ``motions.level_feet`` reads as ``false``: its policy was trained on
+    the file's foot tilt; a new recipe levels the feet."""
+    import shutil
+
+    import yaml
+
+    from retarget.recipe import load
+    from retarget.train.load import locked_recipe
+
+    registry = load_plugins()
+    run = tmp_path / "old"
+    shutil.copytree(pretrained.model_dir("human-teacher"), run)
+    text = (run / "recipe.lock.yaml").read_text()
+    assert "level_feet" not in yaml.safe_load(text)["motions"]
+    assert locked_recipe(run, registry)[0].recipe.motions.level_feet is False
+    fresh = tmp_path / "fresh.yaml"
+    fresh.write_text("extends: null\ncharacter: human\nsensors: [three_point]\n")
+    assert load(str(fresh), registry).recipe.motions.level_feet is True

@@ -18,6 +18,7 @@ from retarget.kinds import (
 )
 from retarget.kinds.lookup import PluginLookup
 from retarget.motion.clip import MotionClip
+from retarget.motion.level_feet import with_level_feet
 from retarget.motion.rest_ends import with_rest_ends
 from retarget.motion.sources import load_motions
 from retarget.recipe import ResolvedRecipe
@@ -99,6 +100,8 @@ def env_from_recipe(
             include=include if include is not None else recipe.motions.include if own else (),
             exclude=exclude if exclude is not None else recipe.motions.exclude if own else (),
         )
+        if recipe.motions.level_feet:
+            clips = with_level_feet(clips)
         if own and recipe.motions.rest_ends:
             clips = with_rest_ends(clips)
     sensors: list[Sensor] = made("sensor")

@@ -63,6 +63,12 @@ class MotionsSection(Strict):
         "a stop (its ends time-warped, retarget.motion.rest_ends): takes cut mid-stride have "
         "neither, and a live user does both",
     )
+    level_feet: bool = Field(
+        True,
+        description="turn each foot's frame level where it is planted (retarget.motion."
+        "level_feet): a file's ankle-to-toe bone is not the sole, and a character trained on "
+        "it stands on tiptoe (Bandai Namco: 19 degrees) or on its heels",
+    )
 
 
 class Recipe(Strict):

@@ -45,6 +45,9 @@ def locked_recipe(
     env = source.data.get("env")
     if isinstance(env, dict) and "devices" not in env:  # locked before env.devices existed:
         env["devices"] = "person"  # its devices were at the performer's size
+    motions = source.data.get("motions")
+    if isinstance(motions, dict) and "level_feet" not in motions:  # locked before it existed:
+        motions["level_feet"] = False  # its references kept the file's foot tilt
     source = apply_overrides(source, shorthands={"scene": scene}, assignments=assignments)
     return resolve(source, registry), lock
 
