@@ -23,6 +23,7 @@ from retarget.learn.estimator import (
 from retarget.learn.pose_samples import J, mirror_body, mirror_devices, pose_targets, sensor_inputs
 from retarget.recipe import load
 from retarget.registry.loader import load_plugins
+from retarget.train.checkpoint import load_checkpoint
 from retarget.train.load import load_run
 
 ESTIMATOR = TINY.replace("name: tiny", "name: est").split("algorithm:")[0] + """\
@@ -113,6 +114,22 @@ def test_an_estimator_run_trains_resumes_evaluates_and_exports(tmp_path: Path) -
     for key in ("mpjpe_mm", "mpjre_deg", "jerk_km_s3", "foot_skate_mm", "penetration_max_mm",
                 "headset_cm", "controller_cm"):
         assert key in overall and np.isfinite(overall[key]), key
+
+    # another run starts from its network (--init-from), with fresh optimiser and counters;
+    # one with another window (other device features) is refused with the reason
+    assert main(["train", str(recipe), "--init-from", str(run), "--set", "name=est2",
+                 "--set", "env.devices=person", "--steps", "128", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    warm = load_run(tmp_path / "est2" / "latest", load_plugins(), num_envs=2)
+    start = load_checkpoint(tmp_path / "est2" / "latest" / "checkpoints" / "ckpt-0000000.pt")
+    source = load_run(run, load_plugins(), num_envs=1).algorithm.learner.net.state_dict()
+    for key, value in start["algorithm"]["net"].items():
+        if key != "norm.count":
+            assert torch.equal(value, source[key]), key
+    assert warm.algorithm.learner.iteration == 1  # 128 samples at 2 x 64, counted afresh
+    rc = main(["train", str(recipe), "--init-from", str(run), "--set", "name=est3",
+               "--set", "algorithm.window=6", "--steps", "64", "--runs-dir", str(tmp_path)])
+    assert rc != 0
 
     # a pose estimator has no actions: play says so instead of failing inside
     assert main(["play", str(run), "--out", str(tmp_path / "x.png")]) == 2
