@@ -126,7 +126,8 @@ class ExpertCommand(Command):
         resolved = load(args.recipe, self.plugins(), assignments=args.assignments,
                         shorthands={**shorthands, "motions": str(files[0])})  # fmt: skip
         recipe = resolved.to_dict()
-        recipe["motions"] = {"path": None}
+        # the clips are named per job; how they are read (level feet, ...) is a setting
+        recipe["motions"] = {**recipe["motions"], "path": None, "include": [], "exclude": []}
         out = Path(args.out)
         header = {"recipe": recipe, "planner": planner.model_dump(mode="json"),
                   "character": recipe["character"]}  # fmt: skip
