@@ -15,6 +15,15 @@ right-multiplied by the correction and the toe's offset and local rotation are c
 so every joint position is unchanged (forward kinematics reproduces the file exactly, as
 before) while the foot and toe frames are level whenever the person stood flat. A foot with too
 few planted frames (a clip in the air, a kneel) or an implausible tilt is left as it is.
+
+A level foot then needs the floor where its sole is. The file's ankle joint is where its
+markers put it (Bandai Namco's stands 10.8 cm above the floor, CMU's 7-8 cm), while the
+canonical skeleton and every character hang the sole :data:`~retarget.motion.skeleton.
+ANKLE_HEIGHT_175` (in proportion) below the ankle; the tilted foot's toe reached the floor by
+coincidence, a level one floats (the human 36 mm, the Dino 92 mm on Bandai Namco walks). So
+the clip is also lowered (or raised) by one constant, putting its planted ankles at the
+canonical ankle height: the floor is redefined by the sole model, no joint moves against
+another.
 """
 
 from __future__ import annotations
@@ -32,6 +41,7 @@ PLANTED_RISE = 0.02  # m: ... and no higher than this above its lowest in the cl
 MIN_FRAMES = 5  # planted frames needed to measure a foot
 MAX_TILT = np.deg2rad(45.0)  # a larger constant tilt is not a marker offset: left alone
 MIN_TILT = np.deg2rad(1.0)  # a foot already this level is left exactly as it is
+MIN_SHIFT = 0.002  # m: a floor already this close is left exactly where it is
 
 
 def level_rotation(global_rot: np.ndarray) -> np.ndarray | None:
@@ -94,8 +104,10 @@ def _correction(clip: MotionClip, joints: tuple[int, int], frames: list[np.ndarr
 
 
 def level_feet(clip: MotionClip) -> MotionClip:
-    """``clip`` with each foot's (and toe's) frame level where it is planted; joint
-    positions unchanged. ``meta['foot_tilt_deg']`` records the corrections (left, right).
+    """``clip`` with each foot's (and toe's) frame level where it is planted, and its planted
+    ankles at the canonical ankle height; no joint moves relative to another.
+    ``meta['foot_tilt_deg']`` records the tilt turned away (left, right), ``meta['floor_shift']``
+    adds the vertical shift.
 
     Planted frames are those with both feet down and still when there are enough (a person
     standing on both feet stands flat; one foot alone may be on its ball), else each foot's.
@@ -104,21 +116,41 @@ def level_feet(clip: MotionClip) -> MotionClip:
     both = own[0] & own[1]
     frames = [both, both] if int(both.sum()) >= MIN_FRAMES else own
     feet = _correction(clip, sk.FEET, frames)
-    if feet is None or float(rot.angle(feet[0])) < MIN_TILT:
+    tilted = feet is not None and float(rot.angle(feet[0])) >= MIN_TILT
+    shift = _ground_shift(clip, frames)
+    if not tilted and abs(shift) < MIN_SHIFT:
         return clip
-    toes = _correction(clip, sk.TOES, frames) or feet
     local = clip.local_rot.copy()
     offsets = clip.offsets.copy()
-    tilts = [0.0, 0.0]
-    for side, (ankle, toe) in enumerate(zip(sk.FEET, sk.TOES, strict=True)):
-        c, c_toe = feet[side], toes[side]
-        local[:, ankle] = rot.normalize(rot.mul(local[:, ankle], c))
-        local[:, toe] = rot.normalize(rot.mul(rot.mul(rot.conj(c), local[:, toe]), c_toe))
-        offsets[toe] = rot.apply(rot.conj(c), offsets[toe])
-        tilts[side] = float(np.rad2deg(rot.angle(c)))
     meta = dict(clip.meta)
-    meta["foot_tilt_deg"] = tilts
-    return clip.with_(local_rot=local, offsets=offsets, meta=meta)
+    if tilted and feet is not None:
+        toes = _correction(clip, sk.TOES, frames) or feet
+        tilts = [0.0, 0.0]
+        for side, (ankle, toe) in enumerate(zip(sk.FEET, sk.TOES, strict=True)):
+            c, c_toe = feet[side], toes[side]
+            local[:, ankle] = rot.normalize(rot.mul(local[:, ankle], c))
+            local[:, toe] = rot.normalize(rot.mul(rot.mul(rot.conj(c), local[:, toe]), c_toe))
+            offsets[toe] = rot.apply(rot.conj(c), offsets[toe])
+            tilts[side] = float(np.rad2deg(rot.angle(c)))
+        meta["foot_tilt_deg"] = tilts
+    root = clip.root_pos
+    if abs(shift) >= MIN_SHIFT:
+        root = root + np.array([0.0, 0.0, shift])
+        meta["floor_shift"] = float(meta.get("floor_shift", 0.0)) + shift  # type: ignore[arg-type]
+        if "foot_clearance" in meta:
+            meta["foot_clearance"] = np.asarray(meta["foot_clearance"]) + shift
+    return clip.with_(root_pos=root, local_rot=local, offsets=offsets, meta=meta)
+
+
+def _ground_shift(clip: MotionClip, frames: list[np.ndarray]) -> float:
+    """Metres to add to every height so the planted ankles stand at the canonical ankle height
+    of this subject; 0 without enough planted frames."""
+    heights = [clip.global_pos[f, ankle, 2] for f, ankle in zip(frames, sk.FEET, strict=True)
+               if int(f.sum()) >= MIN_FRAMES]  # fmt: skip
+    if not heights:
+        return 0.0
+    target = sk.ANKLE_HEIGHT_175 * clip.height / sk.REFERENCE_HEIGHT
+    return float(target - np.median(np.concatenate(heights)))
 
 
 def with_level_feet(clips: Sequence[MotionClip]) -> list[MotionClip]:

@@ -52,10 +52,16 @@ def test_a_low_toe_joint_tilts_the_foot_and_levelling_turns_it_back(low_toes) ->
     assert flat.meta["foot_tilt_deg"][0] == pytest.approx(19.0, abs=1.5)
 
 
-def test_levelling_moves_no_joint(low_toes) -> None:
+def test_levelling_moves_no_joint_against_another_and_grounds_the_ankles(low_toes) -> None:
     flat = level_feet(low_toes)
-    np.testing.assert_allclose(flat.global_pos, low_toes.global_pos, atol=1e-9)
-    np.testing.assert_array_equal(flat.root_pos, low_toes.root_pos)
+    shift = flat.root_pos - low_toes.root_pos
+    assert np.allclose(shift[:, :2], 0.0) and np.ptp(shift[:, 2]) < 1e-12
+    np.testing.assert_allclose(flat.global_pos, low_toes.global_pos + shift[:1], atol=1e-9)
+    # the written walk's floor sat at its lowered toe tips: its planted ankles stood high
+    assert shift[0, 2] < -0.01
+    down = planted(flat, 0)
+    ankle = np.median(flat.global_pos[down, sk.FEET[0], 2])
+    assert ankle == pytest.approx(sk.ANKLE_HEIGHT_175 * flat.height / sk.REFERENCE_HEIGHT, abs=3e-3)
     others = [j for j in range(sk.NUM_JOINTS) if j not in (*sk.FEET, *sk.TOES)]
     np.testing.assert_array_equal(flat.local_rot[:, others], low_toes.local_rot[:, others])
 
@@ -95,7 +101,9 @@ def test_real_captures_are_levelled(mocap_dir: Path) -> None:
     assert np.median(_pitch_deg(clip)[down]) < -10.0
     flat = level_feet(clip)
     assert abs(np.median(_pitch_deg(flat)[down])) < 3.0
-    np.testing.assert_allclose(flat.global_pos, clip.global_pos, atol=1e-9)
+    shift = flat.root_pos[0] - clip.root_pos[0]
+    np.testing.assert_allclose(flat.global_pos, clip.global_pos + shift, atol=1e-9)
+    assert -0.08 < shift[2] < -0.02  # its ankle joints stand 4-5 cm above a level sole's
 
 
 @pytest.mark.parametrize("level", [True, False])
