@@ -170,7 +170,7 @@ def test_a_run_locked_before_env_devices_keeps_the_performers_size(tmp_path: Pat
 
     registry = load_plugins()
     run = tmp_path / "old"
-    shutil.copytree(pretrained.model_dir("human-three_point-estimator"), run)
+    shutil.copytree(pretrained.model_dir("dino-hmd-student"), run)
     text = (run / "recipe.lock.yaml").read_text()
     assert "devices" not in yaml.safe_load(text)["env"]
     assert locked_recipe(run, registry)[0].recipe.env.devices == "person"
