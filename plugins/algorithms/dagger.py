@@ -121,6 +121,12 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
                 if name not in have:
                     mine.append(comp)
             recipe[slot] = mine
+        # the teacher reads references: they must stand as the ones it learned on (a teacher
+        # recorded before motions.level_feet learned on tilted feet, and falls on level ones)
+        teacher_motions = teacher.get("motions") or {}
+        level = bool(teacher_motions.get("level_feet", False)) if isinstance(
+            teacher_motions, dict) else False  # fmt: skip
+        recipe["motions"] = {**(recipe.get("motions") or {}), "level_feet": level}
         env = dict(recipe.get("env") or {})
         groups = dict(env.get("groups") or {})
         groups[c.actor_group] = student_actor
