@@ -82,7 +82,9 @@ def mirrored(q: np.ndarray) -> np.ndarray:
     return q * np.array([1.0, -1.0, 1.0, -1.0])
 
 
-def _correction(clip: MotionClip, joints: tuple[int, int], frames: list[np.ndarray]):
+def _correction(
+    clip: MotionClip, joints: tuple[int, int], frames: list[np.ndarray]
+) -> tuple[np.ndarray, np.ndarray] | None:
     """One correction per side for ``joints`` (left, right), measured on both feet together
     (the right one mirrored): the tilt is the capture's marker geometry, the same on both
     feet, and a foot seldom planted (a run, a hop) gets its partner's."""
