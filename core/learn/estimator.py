@@ -241,18 +241,17 @@ class EstimatorLearner:
         local = reach(out.root_pos, out.matrices, heights, wrist_pos, wrist_rot)
         return replace(out, rot6d=matrix_to_6d(local))
 
-    def warm_start(self, state: Mapping[str, Any], index: torch.Tensor | None) -> None:
-        """The pose network of another estimator run (``state``, its :meth:`state_dict`);
-        ``index`` maps each input column to the source's (-1: new). The optimiser and the
-        counters start fresh, and the input statistics count as a few batches, so devices of
-        another scale (``env.devices``) or other motions take them over within minutes."""
+    def warm_start(self, state: Mapping[str, Any]) -> None:
+        """The pose network of another estimator run that read the same device features
+        (``state``, its :meth:`state_dict`). The optimiser and the counters start fresh, and
+        the input statistics count as a few batches, so devices of another scale
+        (``env.devices``) or other motions take them over within minutes."""
         if "net" not in state:
             raise ValueError("the source run is not a pose estimator (no 'net' in its state)")
-        same = torch.arange(self.obs_dim)
-        if index is None or index.shape != same.shape or not torch.equal(index.cpu(), same):
-            raise ValueError("a pose estimator starts only from one that read the same "
-                             "sensors with the same window (its device features)")
-        self.net.load_state_dict(state["net"])
+        try:
+            self.net.load_state_dict(state["net"])
+        except RuntimeError as exc:  # a tensor of another shape: hidden sizes differ
+            raise ValueError(f"the networks differ: {str(exc).splitlines()[-1].strip()}") from None
         batches = 10.0 * self.settings.batch_size
         self.net.norm.count.fill_(min(float(self.net.norm.count), batches))
 

@@ -57,10 +57,14 @@ def level_rotation(global_rot: np.ndarray) -> np.ndarray | None:
         return None
     yaw = np.arctan2(forward[keep, 1], forward[keep, 0])
     level = rot.from_axis_angle(np.array([0.0, 0.0, 1.0]), yaw)
-    per_frame = rot.mul(rot.conj(global_rot[keep]), level)  # C_t = R_t^T L_t
-    per_frame *= np.where(per_frame[:, :1] < 0, -1.0, 1.0)  # one hemisphere before averaging
-    c = rot.normalize(per_frame.mean(axis=0))
+    c = _mean_rotation(rot.mul(rot.conj(global_rot[keep]), level))  # mean of C_t = R_t^T L_t
     return None if float(rot.angle(c)) > MAX_TILT else c
+
+
+def _mean_rotation(q: np.ndarray, weights: list[float] | None = None) -> np.ndarray:
+    """Weighted mean of nearby rotations ``(N, 4)``, each first put in one hemisphere."""
+    q = q * np.where(q[:, :1] < 0, -1.0, 1.0)
+    return rot.normalize(np.average(q, axis=0, weights=weights))
 
 
 def planted(clip: MotionClip, side: int) -> np.ndarray:
@@ -99,9 +103,7 @@ def _correction(
         weights.append(float(frames[side].sum()))
     if not parts:
         return None
-    stacked = np.stack(parts)
-    stacked *= np.where(stacked[:, :1] < 0, -1.0, 1.0)
-    left = rot.normalize(np.average(stacked, axis=0, weights=weights))
+    left = _mean_rotation(np.stack(parts), weights)
     return left, mirrored(left)
 
 

@@ -21,6 +21,12 @@ from retarget.recipe.source import LOCK_SECTION
 from retarget.train.checkpoint import load_checkpoint
 from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
 
+BEFORE_FIELDS: tuple[tuple[str, str, object], ...] = (
+    ("env", "devices", "person"),  # its devices were at the performer's size
+    ("motions", "level_feet", False),  # its references kept the file's foot tilt
+)
+"""Fields added after runs were recorded, with the value that says what such a run did."""
+
 
 def locked_recipe(
     run: Path, registry: PluginLookup, *, scene: str | None = None, assignments: Sequence[str] = ()
@@ -42,12 +48,10 @@ def locked_recipe(
     lock = yaml.safe_load(text).get(LOCK_SECTION) or {}
     if not isinstance(lock, dict):
         raise RecipeError(f"'{LOCK_SECTION}' must be a mapping", file=str(path))
-    env = source.data.get("env")
-    if isinstance(env, dict) and "devices" not in env:  # locked before env.devices existed:
-        env["devices"] = "person"  # its devices were at the performer's size
-    motions = source.data.get("motions")
-    if isinstance(motions, dict) and "level_feet" not in motions:  # locked before it existed:
-        motions["level_feet"] = False  # its references kept the file's foot tilt
+    for section, field, value in BEFORE_FIELDS:  # a run locked before the field existed
+        part = source.data.get(section)
+        if isinstance(part, dict) and field not in part:
+            part[field] = value
     source = apply_overrides(source, shorthands={"scene": scene}, assignments=assignments)
     return resolve(source, registry), lock
 

@@ -123,9 +123,8 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
             recipe[slot] = mine
         # the teacher reads references: they must stand as the ones it learned on (a teacher
         # recorded before motions.level_feet learned on tilted feet, and falls on level ones)
-        teacher_motions = teacher.get("motions") or {}
-        level = bool(teacher_motions.get("level_feet", False)) if isinstance(
-            teacher_motions, dict) else False  # fmt: skip
+        taught = teacher.get("motions")
+        level = isinstance(taught, dict) and bool(taught.get("level_feet", False))
         recipe["motions"] = {**(recipe.get("motions") or {}), "level_feet": level}
         env = dict(recipe.get("env") or {})
         groups = dict(env.get("groups") or {})

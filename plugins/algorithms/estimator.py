@@ -167,20 +167,20 @@ class Estimator(Algorithm[EstimatorConfig]):
     def warm_start(self, state: Mapping[str, Any], inputs: Mapping[str, torch.Tensor]) -> None:
         """``--init-from`` another estimator run: its network, retrained on this run's motions
         and devices (e.g. devices at the character's size, or another corpus)."""
-        import torch
-
         learner = self._ready()
         env = learner.env
         names = {src.name for src in (*env.sensors, *env.observers)}
-        index, at = [], 0
+        kept, at = True, 0
         for name, size in env.obs_layout["actor"]:  # the estimator reads these sources only
             if name in names:
-                index.append(inputs["actor"][at : at + size] if "actor" in inputs else None)
+                index = inputs["actor"][at : at + size] if "actor" in inputs else None
+                kept = kept and index is not None and bool((index >= 0).all())
+                kept = kept and bool((index.diff() == 1).all())
             at += size
-        same = all(i is not None and bool((i >= 0).all()) and bool((i.diff() == 1).all())
-                   for i in index)  # fmt: skip
-        columns = torch.arange(learner.obs_dim) if same and index else None
-        learner.warm_start(state, columns)
+        if not kept:
+            raise ValueError("a pose estimator starts only from one that read the same "
+                             "sensors with the same window (its device features)")
+        learner.warm_start(state)
 
     def state_dict(self) -> dict[str, Any]:
         return self._ready().state_dict()
