@@ -173,9 +173,11 @@ class Estimator(Algorithm[EstimatorConfig]):
         kept, at = True, 0
         for name, size in env.obs_layout["actor"]:  # the estimator reads these sources only
             if name in names:
-                index = inputs["actor"][at : at + size] if "actor" in inputs else None
-                kept = kept and index is not None and bool((index >= 0).all())
-                kept = kept and bool((index.diff() == 1).all())
+                if "actor" not in inputs:
+                    kept = False
+                    break
+                index = inputs["actor"][at : at + size]
+                kept = kept and bool((index >= 0).all()) and bool((index.diff() == 1).all())
             at += size
         if not kept:
             raise ValueError("a pose estimator starts only from one that read the same "
