@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 from retarget.errors import PluginError
 
@@ -80,3 +80,19 @@ def source_columns(env: object, group: str, source: str) -> slice:
         f"observation group '{group}' has no source '{source}' (has {names})",
         hint=f"add the sensor '{source}' to the recipe's sensors",
     )
+
+
+def residual_columns(env: Any, group: str, source: str | None, plugin: str) -> slice | None:
+    """The columns a residual policy's output is added to (``algorithm.residual``), checked to
+    be one value per action; ``None`` when the policy is not residual."""
+    if source is None:
+        return None
+    found = source_columns(env, group, source)
+    if found.stop - found.start != env.action_dim:
+        raise PluginError(
+            f"residual source '{source}' has {found.stop - found.start} columns, the action "
+            f"{env.action_dim}",
+            plugin=plugin,
+            field="algorithm.residual",
+        )
+    return found

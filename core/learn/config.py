@@ -36,6 +36,14 @@ Hidden = Annotated[
 """Layer widths of an MLP: bounded, so a typo cannot ask for gigabytes of weights."""
 
 
+RESIDUAL = Field(
+    None,
+    description="an actor observation source (e.g. reference_action) whose raw values are "
+    "added to the network's output: the policy learns a residual around it (a policy cloned "
+    "or distilled with one fine-tunes with PPO under the same one)",
+)
+
+
 class PPOConfig(PluginConfig):
     """PPO hyper-parameters (defaults: paper Table 3; the environment count is the recipe's
     ``env.num_envs``, one source of truth for every algorithm)."""
@@ -81,11 +89,7 @@ class PPOConfig(PluginConfig):
         description="first iterations of a run in which only the critic learns: fine-tuning "
         "a distilled student (--init-from), whose critic starts untrained",
     )
-    residual: str | None = Field(
-        None,
-        description="an actor observation source (e.g. reference_action) whose raw values are "
-        "added to the network's output: the policy learns a residual around it",
-    )
+    residual: str | None = RESIDUAL
 
     @property
     def init_std(self) -> float:
@@ -135,6 +139,7 @@ class DaggerConfig(PluginConfig):
     max_grad_norm: float = Field(1.0, gt=0)
     activation: Literal["tanh", "elu", "relu"] = "tanh"
     actor_hidden: Hidden = (300, 200, 100)
+    residual: str | None = RESIDUAL
     obs_clip: float = Field(10.0, gt=0)
     collect_threads: int = Field(1, ge=0, description="torch threads while acting; 0: leave")
     update_threads: int = Field(2, ge=0, description="torch threads while updating; 0: leave")
@@ -164,6 +169,7 @@ class ExpertBCConfig(PluginConfig):
     max_grad_norm: float = Field(1.0, gt=0)
     activation: Literal["tanh", "elu", "relu"] = "tanh"
     actor_hidden: Hidden = (300, 200, 100)
+    residual: str | None = RESIDUAL
     obs_clip: float = Field(10.0, gt=0)
 
     def dagger(self) -> DaggerConfig:
@@ -174,5 +180,5 @@ class ExpertBCConfig(PluginConfig):
             epochs=self.epochs, minibatch_size=self.minibatch_size,
             buffer_rollouts=self.buffer_rollouts, max_grad_norm=self.max_grad_norm,
             activation=self.activation, actor_hidden=self.actor_hidden, obs_clip=self.obs_clip,
-            action_noise=0.0,
+            action_noise=0.0, residual=self.residual,
         )

@@ -46,10 +46,14 @@ class DaggerLearner:
         generator: torch.Generator | None = None,
         images: Sequence[ImageInput] = (),
         comm: Comm = SINGLE,
+        residual: slice | None = None,
     ) -> None:
         """``images``: the student group's image sources (a convolutional encoder each);
-        ``comm``: the ranks of a data-parallel run (see :class:`~retarget.learn.ppo.PPOLearner`)."""
+        ``comm``: the ranks of a data-parallel run (see :class:`~retarget.learn.ppo.PPOLearner`);
+        ``residual``: columns of the raw student observation added to the network's output
+        (``algorithm.residual``), as PPO's, so a residual teacher's actor carries over."""
         self.config = c = config
+        self.residual = residual
         self.comm = comm
         for group in (c.actor_group, c.teacher_group):
             if group not in obs_dims:
@@ -98,14 +102,23 @@ class DaggerLearner:
     def _normalized(self, raw: torch.Tensor) -> torch.Tensor:
         return self.obs_norm.group(self.actor_key, raw)
 
+    def mean(self, raw: torch.Tensor) -> torch.Tensor:
+        """The student's action mean (unclamped) on raw student observations: the network's
+        output, plus the residual source's columns when the policy is residual."""
+        out = self.actor(self._normalized(raw))
+        if self.residual is not None:
+            out = out + raw[:, self.residual].float()
+        return out
+
     @torch.no_grad()
     def act(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
         """The student's deterministic action (its Gaussian's mean) in [-1, 1]."""
-        return self.actor(self._normalized(obs[self.actor_key].float())).clamp(-1.0, 1.0)
+        return self.mean(obs[self.actor_key].float()).clamp(-1.0, 1.0)
 
     def deployable_policy(self) -> nn.Module:
         """Normaliser + student mean network + clamp, frozen: needs no teacher at run time."""
-        return DeployedPolicy(self.obs_norm.normalizer(self.actor_key), self.actor).eval()
+        norm = self.obs_norm.normalizer(self.actor_key)
+        return DeployedPolicy(norm, self.actor, self.residual).eval()
 
     def beta(self) -> float:
         """Probability that the teacher acts in an environment this iteration."""
@@ -136,7 +149,7 @@ class DaggerLearner:
             raw = obs[self.actor_key]
             pending.update({self.actor_key: raw})
             label = self.teacher(obs[self.teacher_key])
-            mean = self.actor(self._normalized(raw))
+            mean = self.mean(raw)
             gap += float((mean.clamp(-1, 1) - label).square().mean())
             noise = torch.randn(mean.shape, generator=self.generator) * c.action_noise
             action = torch.where(teacher_acts[:, None], label, mean + noise)
@@ -165,7 +178,7 @@ class DaggerLearner:
 
     def loss(self, raw: torch.Tensor, label: torch.Tensor) -> torch.Tensor:
         """Supervised loss of the student on raw observations against teacher actions."""
-        mean = self.actor(self._normalized(raw))
+        mean = self.mean(raw)
         if self.config.loss == "mse":
             return (mean - label).square().sum(-1).mean()
         log_std = self.actor.log_std

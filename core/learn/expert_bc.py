@@ -99,8 +99,9 @@ class ExpertBCLearner(DaggerLearner):
 
     def __init__(self, config: DaggerConfig, obs_dims: Mapping[str, int], action_dim: int,
                  num_envs: int, windows: ExpertWindows | None, demo_share: float,
-                 generator: torch.Generator | None = None) -> None:  # fmt: skip
-        super().__init__(config, obs_dims, action_dim, num_envs, generator)
+                 generator: torch.Generator | None = None, residual: slice | None = None
+                 ) -> None:  # fmt: skip
+        super().__init__(config, obs_dims, action_dim, num_envs, generator, residual=residual)
         self.windows = windows
         self.demo_share = demo_share
         seed = int(torch.randint(0, 2**62, (1,), generator=self.generator).item())
@@ -153,7 +154,7 @@ class ExpertBCLearner(DaggerLearner):
                 self.obs_norm.update({key: obs})
             else:
                 pending_rows.append(obs)
-            gap += float((self.actor(self._normalized(obs)).clamp(-1, 1) - label).square().mean())
+            gap += float((self.mean(obs).clamp(-1, 1) - label).square().mean())
             self._store(obs, label)
             next_obs, reward, terminated, truncated, _ = env.step(label)
             self.last_obs = {k: v.float() for k, v in next_obs.items()}

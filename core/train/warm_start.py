@@ -89,6 +89,16 @@ def warm_start(
             file=str(old.checkpoint),
             hint="--init-from needs at least one sensor in common",
         )
+    theirs = getattr(getattr(old.algorithm, "config", None), "residual", None)
+    ours = getattr(getattr(algorithm, "config", None), "residual", None)
+    if theirs != ours:
+        raise RecipeError(
+            f"the source run's policy adds {theirs or 'nothing'} to its network's output, this "
+            f"run's {ours or 'nothing'}: the network would start from other actions",
+            file=str(old.run / LOCK),
+            field="algorithm.residual",
+            hint=f"--set algorithm.residual={theirs or 'null'}",
+        )
     starts = require(algorithm, WarmStartable, hint="train from scratch (drop --init-from)")
     try:
         starts.warm_start(old.algorithm.state_dict(), maps)

@@ -174,13 +174,15 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
         self.registry = registry
 
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
-        from retarget.learn.columns import image_inputs
+        from retarget.learn.columns import image_inputs, residual_columns
         from retarget.learn.dagger import DaggerLearner
+        c = self.config
+        residual = residual_columns(env, c.actor_group, c.residual, self.name)
         try:
-            images = image_inputs(env, self.config.actor_group)
+            images = image_inputs(env, c.actor_group)
             self.learner = DaggerLearner(
-                self.config, env.obs_dims, env.action_dim, env.num_envs, generator, images,
-                comm=self.comm,
+                c, env.obs_dims, env.action_dim, env.num_envs, generator, images,
+                comm=self.comm, residual=residual,
             )
         except ValueError as exc:
             raise PluginError(str(exc), plugin=self.name) from None

@@ -92,16 +92,19 @@ class ExpertBC(LearnerAlgorithm[ExpertBCConfig]):
         return recipe
 
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
+        from retarget.learn.columns import residual_columns
         from retarget.learn.expert_bc import ExpertBCLearner
         c = self.config
+        residual = residual_columns(env, c.actor_group, c.residual, self.name)
         if self._windows is not None:
             self.learner = ExpertBCLearner(c.dagger(), env.obs_dims, env.action_dim,
                                            env.num_envs, self._windows(env.action_dim),
-                                           c.demo_share, generator)  # fmt: skip
+                                           c.demo_share, generator, residual)  # fmt: skip
             return
         try:
             self.learner = ExpertBCLearner(c.dagger(), env.obs_dims, env.action_dim,
-                                           env.num_envs, None, c.demo_share, generator)
+                                           env.num_envs, None, c.demo_share, generator,
+                                           residual)  # fmt: skip
         except ValueError as exc:
             raise PluginError(str(exc), plugin=self.name) from None
 

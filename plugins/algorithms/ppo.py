@@ -6,7 +6,7 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 import retarget
-from retarget import PluginError, VecEnv
+from retarget import VecEnv
 from retarget.learn.config import PPOConfig
 from retarget.learn.delegating import LearnerAlgorithm
 
@@ -32,18 +32,10 @@ class PPO(LearnerAlgorithm[PPOConfig]):
         self.learner: PPOLearner | None = None
 
     def setup(self, env: VecEnv, generator: torch.Generator | None = None) -> None:
-        from retarget.learn.columns import image_inputs, source_columns
+        from retarget.learn.columns import image_inputs, residual_columns
         from retarget.learn.ppo import PPOLearner
-        residual = None
-        if self.config.residual is not None:
-            residual = source_columns(env, self.config.actor_group, self.config.residual)
-            if residual.stop - residual.start != env.action_dim:
-                raise PluginError(
-                    f"residual source '{self.config.residual}' has "
-                    f"{residual.stop - residual.start} columns, the action {env.action_dim}",
-                    plugin=self.name,
-                    field="algorithm.residual",
-                )
+        c = self.config
+        residual = residual_columns(env, c.actor_group, c.residual, self.name)
         groups = (self.config.actor_group, self.config.critic_group)
         images = {g: image_inputs(env, g) for g in groups}
         self.learner = PPOLearner(

@@ -173,3 +173,39 @@ def test_a_rescue_plans_again_only_the_segments_in_trouble(track) -> None:
     assert tr.metrics()["success_clip"]
     never = BeamTracker(env, ExpertConfig(**SMALL, rescue={"threshold": 5.0}))
     assert never.track(0, seconds=0.5).rescued == 0
+
+
+def test_a_residual_teacher_cloned_from_it_fine_tunes_with_ppo(clip_file, tmp_path) -> None:
+    """``retarget train teacher --expert DIR`` with the teacher's residual, then PPO from it:
+    the PPO run starts acting exactly as the clone did (same network, same base added), and a
+    fine-tune that would add another base is refused."""
+    from retarget.train.load import load_run
+
+    out = tmp_path / "expert"
+    small = [f"--planner={k}={v}" for k, v in SMALL.items()]
+    assert _cli("expert", str(clip_file), "--out", str(out), "--seconds", "0.5", *small,
+                cwd=tmp_path).returncode == 0  # fmt: skip
+    runs = tmp_path / "runs"
+    common = ["--num-envs", "8", "--threads", "1", "--runs-dir", str(runs), "--no-tensorboard"]
+    clone = _cli("train", "teacher", "--expert", str(out), "--set", "name=clone", "--set",
+                 "algorithm.residual=reference_action", "--steps", "256", *common, cwd=tmp_path)
+    assert clone.returncode == 0, clone.stderr + clone.stdout
+    tuned = _cli("train", "teacher", "--motions", str(clip_file), "--init-from",
+                 str(runs / "clone" / "latest"), "--set", "name=tuned", "--steps", "64", *common,
+                 cwd=tmp_path)  # fmt: skip
+    assert tuned.returncode == 0, tuned.stderr + tuned.stdout
+
+    registry = load_plugins()
+    a = load_run(runs / "clone" / "latest", registry, num_envs=2)
+    b = load_run(runs / "tuned" / "latest", registry, num_envs=2,
+                 checkpoint=runs / "tuned" / "latest" / "checkpoints" / "ckpt-0000000.pt")
+    obs = {k: v.float() for k, v in b.env.reset().items()}
+    from retarget.learn.columns import source_columns
+    base = obs["actor"][:, source_columns(a.env, "actor", "reference_action")]
+    assert torch.allclose(a.algorithm.act(obs), b.algorithm.act(obs), atol=1e-5)
+    assert not torch.allclose(a.algorithm.act(obs), (a.algorithm.act(obs) - base).clamp(-1, 1))
+
+    other = _cli("train", "teacher", "--motions", str(clip_file), "--init-from",
+                 str(runs / "clone" / "latest"), "--set", "algorithm.residual=null",
+                 "--steps", "32", *common, cwd=tmp_path)  # fmt: skip
+    assert other.returncode != 0 and "algorithm.residual" in other.stderr + other.stdout
