@@ -24,6 +24,32 @@ from retarget.kinds.tracking_env import TrackingEnv
 from retarget.learn.config import DaggerConfig
 from retarget.learn.dagger import DaggerLearner
 
+FAILED_AT_M = 0.5
+"""Mean body distance (m) from the reference at which PHC counts a frame failed: the expert's
+path is cloned only up to its first such frame (after it, the planner tracks a fallen body)."""
+
+
+def tracked_part(data: Mapping[str, np.ndarray], threshold: float = FAILED_AT_M
+                 ) -> dict[str, np.ndarray]:  # fmt: skip
+    """One planned clip cut before its first failed frame: path rows up to it, and the beam
+    members whose segment ends before it. A clip without body positions is kept whole."""
+    body, ref = data.get("body_pos"), data.get("ref_body_pos")
+    frames = len(data["qpos"])
+    if body is None or ref is None or body.shape != ref.shape or body.ndim != 3:
+        return dict(data)
+    over = np.flatnonzero(np.linalg.norm(body - ref, axis=-1).mean(-1) > threshold)
+    cut = max(int(over[0]) if over.size else frames, 1)  # frames kept
+    if cut == frames:
+        return dict(data)
+    out = dict(data)
+    out["qpos"], out["qvel"] = data["qpos"][:cut], data["qvel"][:cut]
+    out["actions"] = data["actions"][: cut - 1]
+    keep = data["demo_frame"] + data["demo_steps"] <= cut - 1
+    for key, arr in data.items():
+        if key.startswith("demo_"):
+            out[key] = arr[keep]
+    return out
+
 
 class ExpertWindows:
     """Every replayable window of an expert directory, for one environment's library.
@@ -34,6 +60,9 @@ class ExpertWindows:
     def __init__(self, clips: Sequence[Mapping[str, np.ndarray]], fields: Sequence[str]) -> None:
         if not clips:
             raise ValueError("an expert needs at least one clip")
+        if sum(len(c["qpos"]) - 1 for c in clips) < 1:
+            raise ValueError("the expert's clips hold no tracked step (each failed at its "
+                             "first frame)")
         self.fields = tuple(fields)
         self.frames = np.array([len(c["qpos"]) for c in clips])
         self.demos = np.array([len(c["demo_frame"]) for c in clips])

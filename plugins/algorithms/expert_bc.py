@@ -114,7 +114,7 @@ class ExpertBC(LearnerAlgorithm[ExpertBCConfig]):
         import numpy as np
 
         from retarget.expert.store import load_track
-        from retarget.learn.expert_bc import ExpertWindows
+        from retarget.learn.expert_bc import ExpertWindows, tracked_part
         c = self.config
         env = tracking_env(env, self.name)
         root = Path(c.expert)
@@ -135,7 +135,7 @@ class ExpertBC(LearnerAlgorithm[ExpertBCConfig]):
             ):
                 raise PluginError(f"clip {name!r} is not the clip the expert planned",
                                   plugin=self.name, hint=str(file))
-            clips.append(data)
+            clips.append(tracked_part(data))
         return ExpertWindows(clips, sim.STATE_FIELDS)
 
     def train_iteration(self, env: VecEnv) -> IterationResult:

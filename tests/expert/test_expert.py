@@ -209,3 +209,30 @@ def test_a_residual_teacher_cloned_from_it_fine_tunes_with_ppo(clip_file, tmp_pa
                  str(runs / "clone" / "latest"), "--set", "algorithm.residual=null",
                  "--steps", "32", *common, cwd=tmp_path)  # fmt: skip
     assert other.returncode != 0 and "algorithm.residual" in other.stderr + other.stdout
+
+
+def test_a_clone_learns_only_the_frames_before_the_expert_failed() -> None:
+    """A planned path whose bodies drift past PHC's 0.5 m from frame 6 on is replayed only up
+    to frame 5; the beam members whose segment reaches frame 6 are left out too."""
+    from retarget.learn.expert_bc import ExpertWindows, tracked_part
+
+    frames, nu = 12, 2
+    drift = np.where(np.arange(frames) >= 6, 0.8, 0.1)  # metres, every body
+    ref = np.zeros((frames, 3, 3))
+    body = ref + drift[:, None, None] * np.array([1.0, 0.0, 0.0])
+    clip = {"qpos": np.arange(frames, dtype=float)[:, None], "qvel": np.zeros((frames, 1)),
+            "actions": np.ones((frames - 1, nu), np.float32), "body_pos": body,
+            "ref_body_pos": ref, "demo_frame": np.array([0, 3, 4]),
+            "demo_steps": np.array([3, 2, 3]), "demo_prev_action": np.zeros((3, nu)),
+            "demo_actions": np.ones((3, 3, nu)), "demo_state_qpos": np.zeros((3, 1)),
+            "demo_state_qvel": np.zeros((3, 1))}  # fmt: skip
+    cut = tracked_part(clip)
+    assert len(cut["qpos"]) == 6 and len(cut["actions"]) == 5
+    assert cut["demo_frame"].tolist() == [0, 3]  # the third ends at frame 7
+    windows = ExpertWindows([cut], ())
+    drawn = windows.draw(500, np.random.default_rng(0), demo_share=0.0, length=4)
+    assert (drawn["frame"] + drawn["steps"]).max() == 5  # the last step reaches frame 5
+    assert np.isin(drawn["qpos"][:, 0], np.arange(6)).all()
+    assert tracked_part({**clip, "body_pos": ref})["qpos"].shape == (frames, 1)  # kept whole
+    with pytest.raises(ValueError, match="no tracked step"):
+        ExpertWindows([tracked_part({**clip, "body_pos": ref + 1.0})], ())
