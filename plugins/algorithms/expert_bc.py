@@ -85,7 +85,11 @@ class ExpertBC(LearnerAlgorithm[ExpertBCConfig]):
             if key in (theirs.get("sim") or {}):
                 sim[key] = theirs["sim"][key]
         recipe["sim"] = sim
-        recipe["motions"] = {"path": str(root / "motions")}
+        # the clips as the expert read them (level feet, rest ends), from its own copies
+        motions = dict(theirs.get("motions") or {})
+        motions.setdefault("level_feet", False)  # an expert planned before the field existed
+        recipe["motions"] = {**motions, "path": str(root / "motions"),
+                             "include": [], "exclude": []}  # fmt: skip
         algorithm = dict(recipe["algorithm"])
         algorithm["expert"] = str(root)
         recipe["algorithm"] = algorithm

@@ -184,12 +184,14 @@ def test_a_residual_teacher_cloned_from_it_fine_tunes_with_ppo(clip_file, tmp_pa
     out = tmp_path / "expert"
     small = [f"--planner={k}={v}" for k, v in SMALL.items()]
     assert _cli("expert", str(clip_file), "--out", str(out), "--seconds", "0.5", *small,
-                cwd=tmp_path).returncode == 0  # fmt: skip
+                "--set", "motions.level_feet=false", cwd=tmp_path).returncode == 0  # fmt: skip
     runs = tmp_path / "runs"
     common = ["--num-envs", "8", "--threads", "1", "--runs-dir", str(runs), "--no-tensorboard"]
     clone = _cli("train", "teacher", "--expert", str(out), "--set", "name=clone", "--set",
                  "algorithm.residual=reference_action", "--steps", "256", *common, cwd=tmp_path)
     assert clone.returncode == 0, clone.stderr + clone.stdout
+    lock = (runs / "clone" / "latest" / "recipe.lock.yaml").read_text()
+    assert "level_feet: false" in lock  # the clips as the expert read them
     tuned = _cli("train", "teacher", "--motions", str(clip_file), "--init-from",
                  str(runs / "clone" / "latest"), "--set", "name=tuned", "--steps", "64", *common,
                  cwd=tmp_path)  # fmt: skip
