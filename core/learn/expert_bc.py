@@ -60,11 +60,11 @@ class ExpertWindows:
     def __init__(self, clips: Sequence[Mapping[str, np.ndarray]], fields: Sequence[str]) -> None:
         if not clips:
             raise ValueError("an expert needs at least one clip")
-        if sum(len(c["qpos"]) - 1 for c in clips) < 1:
-            raise ValueError("the expert's clips hold no tracked step (each failed at its "
-                             "first frame)")
         self.fields = tuple(fields)
         self.frames = np.array([len(c["qpos"]) for c in clips])
+        if (self.frames - 1).sum() < 1:
+            raise ValueError("the expert's clips hold no tracked step (each failed at its "
+                             "first frame)")
         self.demos = np.array([len(c["demo_frame"]) for c in clips])
         self.nu = int(clips[0]["actions"].shape[1])
         self.frame_start = np.concatenate([[0], np.cumsum(self.frames)[:-1]])

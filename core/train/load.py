@@ -28,6 +28,15 @@ BEFORE_FIELDS: tuple[tuple[str, str, object], ...] = (
 """Fields added after runs were recorded, with the value that says what such a run did."""
 
 
+def fill_before_fields(recipe: dict) -> None:
+    """Give a recorded recipe (a run's lock, an expert directory's header) each field of
+    :data:`BEFORE_FIELDS` it lacks, with the value that says what it did before the field."""
+    for section, field, value in BEFORE_FIELDS:
+        part = recipe.get(section)
+        if isinstance(part, dict) and field not in part:
+            part[field] = value
+
+
 def locked_recipe(
     run: Path, registry: PluginLookup, *, scene: str | None = None, assignments: Sequence[str] = ()
 ) -> tuple[ResolvedRecipe, dict]:
@@ -48,10 +57,7 @@ def locked_recipe(
     lock = yaml.safe_load(text).get(LOCK_SECTION) or {}
     if not isinstance(lock, dict):
         raise RecipeError(f"'{LOCK_SECTION}' must be a mapping", file=str(path))
-    for section, field, value in BEFORE_FIELDS:  # a run locked before the field existed
-        part = source.data.get(section)
-        if isinstance(part, dict) and field not in part:
-            part[field] = value
+    fill_before_fields(source.data)  # a run locked before a field existed
     source = apply_overrides(source, shorthands={"scene": scene}, assignments=assignments)
     return resolve(source, registry), lock
 

@@ -62,6 +62,7 @@ class ExpertBC(LearnerAlgorithm[ExpertBCConfig]):
 
     def prepare_recipe(self, recipe: dict[str, Any], registry: Any) -> dict[str, Any]:
         from retarget.expert.store import read_header
+        from retarget.train.load import fill_before_fields
         c = self.config
         root = Path(c.expert).resolve()
         header = read_header(root)
@@ -86,9 +87,9 @@ class ExpertBC(LearnerAlgorithm[ExpertBCConfig]):
                 sim[key] = theirs["sim"][key]
         recipe["sim"] = sim
         # the clips as the expert read them (level feet, rest ends), from its own copies
-        motions = dict(theirs.get("motions") or {})
-        motions.setdefault("level_feet", False)  # an expert planned before the field existed
-        recipe["motions"] = {**motions, "path": str(root / "motions"),
+        recorded = {"motions": dict(theirs.get("motions") or {})}
+        fill_before_fields(recorded)  # an expert planned before a field existed
+        recipe["motions"] = {**recorded["motions"], "path": str(root / "motions"),
                              "include": [], "exclude": []}  # fmt: skip
         algorithm = dict(recipe["algorithm"])
         algorithm["expert"] = str(root)
