@@ -28,6 +28,7 @@ import torch
 
 from retarget.errors import PluginError
 from retarget.expert.config import CostWeights, ExpertConfig
+from retarget.expert.inverse import reference_torques
 from retarget.sim.actuation import describe_actuation
 from retarget.sim.backend import make_sim
 
@@ -133,7 +134,10 @@ class BeamTracker:
         model = self.sim.model
         self._dof = np.asarray(model.jnt_dofadr[model.actuator_trnid[: layout.nu, 0]], np.intp)
         servo = describe_actuation(model, "pd")
-        self._damping = np.asarray(servo["kd"]) / np.asarray(servo["kp"])  # seconds
+        self._kp = np.asarray(servo["kp"], dtype=np.float64)
+        self._damping = np.asarray(servo["kd"]) / self._kp  # seconds
+        self._joints = np.asarray(model.actuator_trnid[: layout.nu, 0], np.intp)
+        self._inverse: tuple[int, np.ndarray] = (0, np.zeros((0, layout.nu)))
         if self._damping.shape != (layout.nu,):
             raise PluginError("every actuator must be a PD joint servo", plugin="expert")
 
@@ -147,7 +151,27 @@ class BeamTracker:
         if not c.velocity_ff:
             return np.zeros(self.env.layout.nu)
         qd = self.env.reference.qvel64[row][self._dof]
-        return c.velocity_ff * self._damping * qd / self._scale
+        ff = c.velocity_ff * self._damping * qd / self._scale
+        first, torques = self._inverse
+        if c.inverse_ff and 0 <= row - first < len(torques):
+            ff = ff + c.inverse_ff * torques[row - first] / (self._kp * self._scale)
+        return ff
+
+    def _prepare_inverse(self, start: int, length: int, placed_qpos: np.ndarray) -> None:
+        """Inverse-dynamics torques of the clip's reference rows (``inverse_ff``), the
+        scene's joints held where the clip was placed."""
+        if not self.config.inverse_ff:
+            return
+        ref, lay = self.env.reference, self.env.layout
+        rows = np.arange(start, start + length)
+        qpos = np.repeat(placed_qpos[None], length, axis=0)
+        qpos[:, : lay.nq] = ref.qpos64[rows]
+        qvel = np.zeros((length, self.sim.model.nv))
+        qvel[:, : lay.nv] = ref.qvel64[rows]
+        dt = self.env.sim.settings.control_dt
+        torques = reference_torques(self.sim.model, qpos, qvel, dt, self._joints,
+                                    support=self.config.inverse_support)  # fmt: skip
+        self._inverse = (start, torques)
 
     # ------------------------------------------------------------------ helpers
 
@@ -203,6 +227,7 @@ class BeamTracker:
             "qvel": env.sim.raw("qvel")[0].copy(),
             "body": env.sim.state.body_pos[0].numpy().astype(np.float64),
         }
+        self._prepare_inverse(start, length, first["qpos"])
         best: tuple[float, dict[str, np.ndarray], dict[str, np.ndarray], int] | None = None
         prior: np.ndarray | None = None
         for round_ in range(c.passes):

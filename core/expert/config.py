@@ -63,6 +63,13 @@ class ExpertConfig(BaseModel):
     velocity_ff: float = Field(1.0, ge=0, le=2, description="share of the servo's damping "
                                "lag cancelled: the nominal target gains damping x the "
                                "reference joint velocity (kd/kp x qdot)")
+    inverse_ff: float = Field(0.0, ge=0, le=2, description="share of the reference's "
+                              "inverse-dynamics torque (over kp) added to the nominal target "
+                              "of every joint whose bodies touch nothing in that frame "
+                              "(arms, head, a swing leg): servos no longer sag or lag there")
+    inverse_support: bool = Field(False, description="joints whose bodies touch the world "
+                                  "get inverse torques too, the root's share carried by "
+                                  "least-norm forces at the contacts (a stance leg's load)")
     lead: int = Field(1, ge=0, le=10, description="the nominal targets are this many frames "
                       "ahead of the frame being reached (PD servos lag)")
     keep: int = Field(16, ge=0, le=4096, description="beam members per segment saved as "
