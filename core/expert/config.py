@@ -5,6 +5,12 @@ from __future__ import annotations
 from pydantic import BaseModel, ConfigDict, Field
 
 
+ADDED_LATER: dict[str, object] = {"inverse_ff": 0.0, "inverse_support": False}
+"""Planner fields added after expert directories were written, with the value that plans as
+before: a field at that value is left out of a directory's settings key, so a directory
+planned before the field existed still resumes."""
+
+
 class CostWeights(BaseModel):
     """Weights of the segment-end cost, each term a distance to the reference frame."""
 

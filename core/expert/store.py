@@ -25,6 +25,7 @@ import numpy as np
 
 from retarget.errors import RecipeError
 from retarget.expert.beam import Track
+from retarget.expert.config import ADDED_LATER
 
 VERSION = 1
 HEADER = "expert.json"
@@ -44,8 +45,11 @@ def clip_name(path: Path, taken: set[str]) -> str:
 
 
 def settings_key(header: Mapping[str, Any]) -> str:
-    """Hash of what decides a clip's plan (recipe and planner settings)."""
-    blob = json.dumps({k: header[k] for k in ("recipe", "planner")}, sort_keys=True)
+    """Hash of what decides a clip's plan (recipe and planner settings); planner fields of
+    :data:`ADDED_LATER` at their old behaviour's value are left out."""
+    planner = {k: v for k, v in dict(header["planner"]).items()
+               if k not in ADDED_LATER or v != ADDED_LATER[k]}  # fmt: skip
+    blob = json.dumps({"recipe": header["recipe"], "planner": planner}, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 

@@ -125,3 +125,21 @@ def test_support_loads_the_stance_legs_and_a_standing_body_holds_its_pose(env) -
             mujoco.mj_step(model, data)
         errors.append(np.abs(data.qpos[qadr] - qpos[0, qadr]).mean())
     assert errors[1] < 0.3 * errors[0], errors
+
+
+def test_a_directory_planned_before_the_fields_existed_keeps_its_key() -> None:
+    """Fields added later, at the value that plans as before, leave the settings key alone
+    (an older expert directory resumes); turned on, they change it."""
+    from retarget.expert import ExpertConfig
+    from retarget.expert.config import ADDED_LATER
+    from retarget.expert.store import settings_key
+
+    planner = ExpertConfig().model_dump(mode="json")
+    old = {k: v for k, v in planner.items() if k not in ADDED_LATER}
+    recipe = {"character": "human"}
+    assert settings_key({"recipe": recipe, "planner": old}) == settings_key(
+        {"recipe": recipe, "planner": planner})
+    for field in ADDED_LATER:
+        on = {**planner, field: 1.0 if field == "inverse_ff" else True}
+        assert settings_key({"recipe": recipe, "planner": on}) != settings_key(
+            {"recipe": recipe, "planner": planner})
