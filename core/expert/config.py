@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pydantic import BaseModel, ConfigDict, Field
 
-
 ADDED_LATER: dict[str, object] = {"inverse_ff": 0.0, "inverse_support": False}
 """Planner fields added after expert directories were written, with the value that plans as
 before: a field at that value is left out of a directory's settings key, so a directory
