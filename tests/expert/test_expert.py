@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from helpers import REPO
 
 from retarget.env.build import env_from_recipe
 from retarget.errors import PluginError, RecipeError
@@ -115,6 +116,18 @@ def test_cli_plans_resumes_and_a_student_clones_it(clip_file, tmp_path) -> None:
     report = json.loads((out / "report.json").read_text())
     assert report["summary"]["clips"] == 1 and "idle" in report["clips"]
     assert "success_clip=1.000" in first.stdout
+    picture = subprocess.run(
+        [sys.executable, str(REPO / "benchmarks" / "expert_picture.py"), str(out), "idle",
+         "--out", str(tmp_path / "plan.png"), "--frames", "4", "--size", "64", "48"],
+        cwd=tmp_path, capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert picture.returncode == 0, picture.stderr
+    png = (tmp_path / "plan.png").read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    assert int.from_bytes(png[16:20], "big") >= 4 * 64 and int.from_bytes(png[20:24], "big") == 48
+    missing = subprocess.run(
+        [sys.executable, str(REPO / "benchmarks" / "expert_picture.py"), str(out), "walk",
+         "--out", str(tmp_path / "x.png")], cwd=tmp_path, capture_output=True, text=True)
+    assert missing.returncode != 0 and "'walk' matches 0 planned clips" in missing.stderr
     again = _cli("expert", str(clip_file), "--out", str(out), "--seconds", "0.5", *small,
                  cwd=tmp_path)  # fmt: skip
     assert again.returncode == 0 and "1 planned before, 0 to plan" in again.stderr
