@@ -64,7 +64,8 @@ def reference_torques(
     free_joint = np.flatnonzero(np.asarray(model.jnt_type) == mujoco.mjtJoint.mjJNT_FREE)
     own = (subtree_masks(model, free_joint[:1])[0] if free_joint.size
            else np.zeros(model.nbody, dtype=bool))  # fmt: skip
-    root_dofs = np.arange(6) if free_joint.size else np.arange(0)
+    root_dofs = (int(model.jnt_dofadr[free_joint[0]]) + np.arange(6) if free_joint.size
+                 else np.arange(0))  # fmt: skip
     jacp = np.zeros((3, model.nv))
     dofs = np.asarray(model.jnt_dofadr[joint_ids], dtype=np.intp)
     geom_body = np.asarray(model.geom_bodyid)
