@@ -3,14 +3,16 @@ simulated character) with the reference as a blue ghost skeleton, a few frames a
 
     python benchmarks/expert_picture.py runs/expert walk_normal_001 --out results/x.png
 
-The planner's recipe is the packaged ``teacher`` recipe (``--recipe`` as for ``retarget
-expert``); replaying the recorded actions from the placed first frame goes through the
-planned states (the expert's tests check this), so the picture is the plan itself.
+The env is ``--recipe`` (the packaged ``teacher`` recipe, as for ``retarget expert``) with the
+physics and the clip reading the expert directory recorded; replaying the recorded actions
+from the placed first frame goes through the planned states (the expert's tests check this),
+so the picture is the plan itself.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 import numpy as np
@@ -40,15 +42,22 @@ def main() -> int:
     if len(found) != 1:
         parser.error(f"{args.clip!r} matches {len(found)} planned clips in {args.expert_dir}")
     name = found[0].stem
-    motion = next((args.expert_dir / "motions").glob(f"{name}.*"))
+    motion = next((args.expert_dir / "motions").glob(f"{name}.*"), None)
+    if motion is None:
+        parser.error(f"{args.expert_dir / 'motions'} holds no copy of {name}")
     with np.load(found[0], allow_pickle=False) as z:
         actions = np.asarray(z["actions"], dtype=np.float32)
     ensure_offscreen()
     registry = load_plugins(strict=False)
-    recipe = load(args.recipe, registry, shorthands={
-        "character": header["character"] if isinstance(header["character"], str)
-        else header["character"]["type"], "motions": str(motion)},
-        assignments=["env.num_envs=1"])  # fmt: skip
+    recorded = header["recipe"]
+    sets = ["env.num_envs=1"] + [
+        f"{section}.{key}={json.dumps(value)}"
+        for section in ("sim", "motions")
+        for key, value in (recorded.get(section) or {}).items()
+        if isinstance(value, bool | int | float | str) and key != "threads"
+    ]  # the physics and clip reading the expert planned with
+    recipe = load(args.recipe, registry, shorthands={"character": header["character"],
+                  "motions": str(motion)}, assignments=sets)  # fmt: skip
     env = env_from_recipe(recipe, registry=registry, threads=1)
     step = iter(actions)
 

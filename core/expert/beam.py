@@ -144,22 +144,25 @@ class BeamTracker:
     def _feedforward(self, row: int) -> np.ndarray:
         """``(nu,)``: what the nominal target gains so that a PD servo moving with the
         reference does not lag it: its damping torque ``kd x qdot`` cancelled by ``kp x
-        (damping x qdot)`` more target, in action units. (Adding the current state's
-        gravity torques over kp the same way was tried: it made walks worse, the stance
-        leg's torque comes through the contacts, not the tree.)"""
+        (damping x qdot)`` more target, in action units; plus the reference's own
+        inverse-dynamics offset where ``inverse_ff`` asks for it (:meth:`_prepare_inverse`;
+        the current state's gravity torques on every joint were tried first: they made walks
+        worse, the stance leg's torque comes through the contacts, not the tree)."""
         c = self.config
-        if not c.velocity_ff:
-            return np.zeros(self.env.layout.nu)
-        qd = self.env.reference.qvel64[row][self._dof]
-        ff = c.velocity_ff * self._damping * qd / self._scale
-        first, torques = self._inverse
-        if c.inverse_ff and 0 <= row - first < len(torques):
-            ff = ff + c.inverse_ff * torques[row - first] / (self._kp * self._scale)
+        ff = np.zeros(self.env.layout.nu)
+        if c.velocity_ff:
+            qd = self.env.reference.qvel64[row][self._dof]
+            ff = c.velocity_ff * self._damping * qd / self._scale
+        first, targets = self._inverse
+        if 0 <= row - first < len(targets):
+            ff = ff + targets[row - first]
         return ff
 
     def _prepare_inverse(self, start: int, length: int, placed_qpos: np.ndarray) -> None:
-        """Inverse-dynamics torques of the clip's reference rows (``inverse_ff``), the
-        scene's joints held where the clip was placed."""
+        """The target offsets (action units) of the clip's reference rows that carry their
+        inverse-dynamics torques (``inverse_ff`` x torque / kp), the scene's joints held
+        where the clip was placed; none when ``inverse_ff`` is 0."""
+        self._inverse = (start, np.zeros((0, self.env.layout.nu)))
         if not self.config.inverse_ff:
             return
         ref, lay = self.env.reference, self.env.layout
@@ -171,7 +174,7 @@ class BeamTracker:
         dt = self.env.sim.settings.control_dt
         torques = reference_torques(self.sim.model, qpos, qvel, dt, self._joints,
                                     support=self.config.inverse_support)  # fmt: skip
-        self._inverse = (start, torques)
+        self._inverse = (start, self.config.inverse_ff * torques / (self._kp * self._scale))
 
     # ------------------------------------------------------------------ helpers
 

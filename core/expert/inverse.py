@@ -1,15 +1,16 @@
-"""Joint torques that move the reference, for the joints whose bodies touch nothing.
+"""Joint torques that move the reference, so the planner's PD targets do not sag or lag.
 
 A PD servo holding a limb against gravity sags by ``torque / kp``; a servo swinging it lags
 by its inertia. Inverse dynamics of the reference (``mj_inverse`` on its poses, velocities
-and accelerations, constraints off) gives the torque each joint needs, but only where the
-joint's subtree carries no contact force: a stance leg's load comes through the floor, which
-the free-floating inverse does not know (adding the bias torques to every joint was measured
-to make walks worse). So each frame's contacts are found on the reference pose itself (the
-model's own collision, every geom's margin widened a little so a foot about to land counts),
-and a joint gets its inverse torque only in frames where no body below it touches anything:
-arms, head, spine above the hips, a swing leg. Why by hand: no library gives per-joint
-contact-free inverse dynamics of a MuJoCo model.
+and accelerations, constraints off) gives the torque each joint needs, but it treats the
+root as if it could push itself: a stance leg's load comes through the floor, which the
+free-floating inverse does not know (adding the bias torques to every joint was measured to
+make walks worse). So each frame's contacts are found on the reference pose itself (the
+model's own collision, every geom's margin widened a little so a foot about to land counts).
+Either a joint gets its inverse torque only in frames where no body below it touches
+anything (arms, head, spine above the hips, a swing leg), or (``support``) the root's wrench
+is handed to the contacts and every joint gets what is left. Why by hand: no library gives
+contact-aware inverse dynamics of a MuJoCo model.
 """
 
 from __future__ import annotations
@@ -19,16 +20,13 @@ import numpy as np
 
 
 def subtree_masks(model: mujoco.MjModel, joint_ids: np.ndarray) -> np.ndarray:
-    """``(len(joint_ids), nbody)`` bool: the bodies each joint moves (its body's subtree)."""
+    """``(len(joint_ids), nbody)`` bool: the bodies each joint moves (its body's subtree).
+    MuJoCo numbers every body after its parent, so one pass in body order fills them."""
     parent = np.asarray(model.body_parentid)
-    mask = np.zeros((len(joint_ids), model.nbody), dtype=bool)
-    for i, j in enumerate(joint_ids):
-        root = int(model.jnt_bodyid[j])
-        for b in range(model.nbody):
-            c = b
-            while c != root and c != 0:
-                c = int(parent[c])
-            mask[i, b] = c == root
+    roots = np.asarray(model.jnt_bodyid[joint_ids], dtype=np.intp)
+    mask = np.zeros((len(roots), model.nbody), dtype=bool)
+    for b in range(1, model.nbody):
+        mask[:, b] = mask[:, parent[b]] | (roots == b)
     return mask
 
 

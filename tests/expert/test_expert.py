@@ -251,3 +251,30 @@ def test_a_clone_learns_only_the_frames_before_the_expert_failed() -> None:
     assert tracked_part({**clip, "body_pos": ref})["qpos"].shape == (frames, 1)  # kept whole
     with pytest.raises(ValueError, match="no tracked step"):
         ExpertWindows([tracked_part({**clip, "body_pos": ref + 1.0})], ())
+
+
+def test_inverse_feedforward_reaches_the_targets_with_or_without_the_velocity_term(track):
+    """``inverse_ff`` adds its share of the reference's torque over kp to the target of the
+    rows of the clip being planned, whether ``velocity_ff`` is on or off."""
+    from retarget.expert.inverse import reference_torques
+    from retarget.sim.actuation import describe_actuation
+
+    env, _ = track
+    half = BeamTracker(env, ExpertConfig(**SMALL, velocity_ff=0.0, inverse_ff=0.5))
+    half.track(0, seconds=0.3)
+    model = half.sim.model
+    start = int(env.library.start[0])
+    row = start + 5
+    qpos = np.tile(model.qpos0, (12, 1))
+    qpos[:, : env.layout.nq] = env.reference.qpos64[start : start + 12]
+    qvel = np.zeros((12, model.nv))
+    qvel[:, : env.layout.nv] = env.reference.qvel64[start : start + 12]
+    joints = model.actuator_trnid[: env.layout.nu, 0]
+    tau = reference_torques(model, qpos, qvel, env.sim.settings.control_dt, joints)[5]
+    pd = describe_actuation(model, "pd")
+    want = 0.5 * tau / (np.asarray(pd["kp"]) * np.asarray(pd["scale"]))
+    np.testing.assert_allclose(half._feedforward(row), want, rtol=1e-6, atol=1e-9)
+    assert np.abs(want).max() > 0
+    off = BeamTracker(env, ExpertConfig(**SMALL, velocity_ff=0.0))
+    off.track(0, seconds=0.3)
+    assert not off._feedforward(row).any()
