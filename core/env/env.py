@@ -95,6 +95,7 @@ class RetargetEnv:
         self.reference = CharacterReference(character, self.world.model, layout, clips,
                                             mocap=self._clip_placements(len(clips)))  # fmt: skip
         self.sim = make_sim(self.world.model, layout, n, sim)
+        self.reference.use_servos(self.sim.model)  # the servos exist once the sim set them up
         self.sensors, self.observers = list(sensors), list(observers)
         for plugin in (*self.sensors, *self.observers):
             plugin.bind(layout)

@@ -3,8 +3,10 @@
 Every library frame gets the kinematically retargeted character pose (``qpos``), its
 velocities (finite differences at the control rate), the world poses of the bodies and role
 sites (MuJoCo forward kinematics) and its scene contact labels per body group
-(:mod:`retarget.scene.contacts`). At run time a step's reference is pure indexing into these
-flat arrays with the library's ``(N,)`` row indices: no kinematics and no loops per step.
+(:mod:`retarget.scene.contacts`) and the torque each actuated joint needs to move along it
+(:mod:`retarget.sim.inverse_dynamics`, a residual policy's feedforward). At run time a
+step's reference is pure indexing into these flat arrays with the library's ``(N,)`` row
+indices: no kinematics and no loops per step.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from retarget.kinds.state import Layout, SimState
 from retarget.motion.clip import MotionClip
 from retarget.scene.contacts import DEFAULT_MARGIN, scene_contact_labels
 from retarget.sim.batched import body_velocities
+from retarget.sim.inverse_dynamics import reference_torques
 
 
 def _velocities(model: mujoco.MjModel, qpos: np.ndarray, fps: float) -> np.ndarray:
@@ -64,6 +67,8 @@ class CharacterReference:
             cached = _compute(model, layout, joint_map, clips, contact_margin, mocap)
             store_reference(key, cached)
         qpos, qvel, labels = cached.pop("qpos"), cached.pop("qvel"), cached.pop("labels")
+        self._torque = cached.pop("joint_torque")
+        self._actuator_dofs = _actuator_dofs(model)
         arrays = cached
         self.scene_contacts = torch.as_tensor(labels, dtype=torch.bool)
         # the character's block only: joints of articulated scene props follow it and keep
@@ -80,6 +85,25 @@ class CharacterReference:
     def num_frames(self) -> int:
         return int(self.qpos.shape[0])
 
+    def use_servos(self, model: mujoco.MjModel) -> None:
+        """Express the reference's joint torques as PD-target offsets of ``model``'s servos
+        (``SimState.pd_feedforward``): ``(torque + kd * qdot) / kp`` per actuator, 0 where an
+        actuator is no PD servo, and no more than the offset at which the servo reaches its
+        force limit (a larger one asks for torque it cannot give: a kick's peak
+        acceleration would otherwise ask for 10 rad). Called once the simulator has set the
+        actuation up."""
+        kp = -np.asarray(model.actuator_biasprm[:, 1], dtype=np.float64)
+        kd = -np.asarray(model.actuator_biasprm[:, 2], dtype=np.float64)
+        servo = (kp > 0) & (self._actuator_dofs >= 0)
+        gain = np.where(servo, kp, 1.0)
+        dofs = self._actuator_dofs
+        qd = np.where(dofs >= 0, self.qvel64[:, np.maximum(dofs, 0)], 0.0)
+        limited = np.asarray(model.actuator_forcelimited, dtype=bool)
+        reach = np.where(limited, np.asarray(model.actuator_forcerange[:, 1]) / gain, np.inf)
+        offset = np.clip((self._torque + kd * qd) / gain, -reach, reach)
+        offset = np.where(servo, offset, 0.0)
+        self.arrays["pd_feedforward"] = torch.as_tensor(offset, dtype=torch.float32)
+
     def pose(self, rows: torch.Tensor) -> SimState:
         """The reference state at flat library rows ``(N,)`` (contact forces are zero)."""
         a = self.arrays
@@ -94,7 +118,18 @@ class CharacterReference:
             site_quat=a["site_quat"][rows],
             contact_force=torch.zeros(rows.shape[0], a["body_pos"].shape[1]),
             contact_force_up=torch.zeros(rows.shape[0], a["body_pos"].shape[1]),
+            pd_feedforward=a["pd_feedforward"][rows] if "pd_feedforward" in a else None,
         )
+
+
+def _actuator_dofs(model: mujoco.MjModel) -> np.ndarray:
+    """``(nu,)``: the degree of freedom each actuator drives when it drives one hinge or
+    slide joint, else -1."""
+    joints = np.asarray(model.actuator_trnid[:, 0], dtype=np.intp)
+    on_joint = np.asarray(model.actuator_trntype) == int(mujoco.mjtTrn.mjTRN_JOINT)
+    kind = np.asarray(model.jnt_type)[np.where(on_joint, joints, 0)]
+    one_dof = np.isin(kind, [int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_SLIDE)])
+    return np.where(on_joint & one_dof, np.asarray(model.jnt_dofadr)[joints], -1).astype(np.intp)
 
 
 def _compute(
@@ -106,11 +141,19 @@ def _compute(
     mocap: Sequence[tuple[np.ndarray, np.ndarray] | None] | None,
 ) -> dict[str, np.ndarray]:
     """Retargeting, velocities, forward kinematics and contact labels of every frame."""
-    qpos_parts, qvel_parts = [], []
+    qpos_parts, qvel_parts, torque_parts = [], [], []
+    dofs = _actuator_dofs(model)
+    joints = np.asarray(model.actuator_trnid[:, 0], dtype=np.intp)[dofs >= 0]
     for clip in clips:
         motion = retarget_clip(clip, model, joint_map)
         qpos_parts.append(motion.qpos)
         qvel_parts.append(_velocities(model, motion.qpos, clip.fps))
+        torque = np.zeros((len(motion.qpos), model.nu))
+        # the load of a stance foot comes through the floor (the scene at its compiled
+        # placement): shared out over the reference pose's contacts
+        torque[:, dofs >= 0] = reference_torques(model, motion.qpos, qvel_parts[-1],
+                                                 1.0 / clip.fps, joints, support=True)  # fmt: skip
+        torque_parts.append(torque)
     qpos = np.concatenate(qpos_parts)
     qvel = np.concatenate(qvel_parts)
     frames = len(qpos)
@@ -153,4 +196,5 @@ def _compute(
         ])  # fmt: skip
     ang, lin = body_velocities(cvel, arrays["body_pos"], com)
     arrays["body_angvel"], arrays["body_linvel"] = ang, lin
-    return {"qpos": qpos, "qvel": qvel, "labels": labels, **arrays}
+    return {"qpos": qpos, "qvel": qvel, "labels": labels,
+            "joint_torque": np.concatenate(torque_parts), **arrays}  # fmt: skip

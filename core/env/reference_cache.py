@@ -22,12 +22,12 @@ import numpy as np
 from retarget.motion.clip import MotionClip
 from retarget.motion.clip_cache import clip_cache_dir
 
-VERSION = 1
+VERSION = 2
 """Bumped when the reference is computed differently, so old files are not reused."""
 MIN_FRAMES = 20_000
 """Libraries shorter than this (about 9 minutes at 36 Hz) are computed, not cached."""
-FIELDS = ("qpos", "qvel", "labels", "body_pos", "body_quat", "body_linvel", "body_angvel",
-          "site_pos", "site_quat")  # fmt: skip
+FIELDS = ("qpos", "qvel", "labels", "joint_torque", "body_pos", "body_quat", "body_linvel",
+          "body_angvel", "site_pos", "site_quat")  # fmt: skip
 
 
 def reference_key(

@@ -28,9 +28,9 @@ import torch
 
 from retarget.errors import PluginError
 from retarget.expert.config import CostWeights, ExpertConfig
-from retarget.expert.inverse import reference_torques
 from retarget.sim.actuation import describe_actuation
 from retarget.sim.backend import make_sim
+from retarget.sim.inverse_dynamics import reference_torques
 
 
 @dataclass

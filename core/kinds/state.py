@@ -100,6 +100,12 @@ class SimState:
     # (N, B) upward (+Z) component of the net contact force on each body, newtons: what
     # carries the body's weight (QuestEnvSim's contact rule thresholds it)
     contact_force_up: torch.Tensor
+    pd_feedforward: torch.Tensor | None = None
+    """``(N, nu)`` radians, on reference states only (None on the simulated body): what each
+    PD target adds to its joint's reference angle so that the servo, on the reference, gives
+    the joint the reference's inverse-dynamics torque (gravity, inertia, the load its contacts
+    carry) and cancels its own damping; zero under torque actuation. A servo given only the
+    reference angle sags by ``torque / kp`` and lags by its damping."""
 
     @property
     def num_envs(self) -> int:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 import mujoco
@@ -178,6 +179,13 @@ def _fake_state(layout: Layout, n: int, g: torch.Generator) -> SimState:
     )
 
 
+def _fake_reference(layout: Layout, n: int, g: torch.Generator, extra: torch.Generator) -> SimState:
+    """A fake reference state: a random state plus its PD feedforward (drawn from ``extra``,
+    so the other fake values do not move with it)."""
+    return replace(_fake_state(layout, n, g),
+                   pd_feedforward=torch.randn(n, layout.nu, generator=extra) * 0.05)  # fmt: skip
+
+
 FAKE_LIBRARY_SECONDS = 1.0
 
 
@@ -216,12 +224,14 @@ def fake_context(
         ],
         dim=-1,
     )
+    extra = torch.Generator().manual_seed(seed + 1)
     ref = ReferenceBatch(
-        pose=_fake_state(layout, num_envs, g),
+        pose=_fake_reference(layout, num_envs, g, extra),
         devices=devices,
         window_offsets=window_offsets,
         contacts=torch.rand(num_envs, 2, generator=g) > 0.5,  # left, right foot
-        future={k: _fake_state(layout, num_envs, g) for k in sorted(set(future_offsets))},
+        future={k: _fake_reference(layout, num_envs, g, extra)
+                for k in sorted(set(future_offsets))},
         scene_contacts=torch.rand(num_envs, len(layout.body_groups), generator=g) > 0.5,
         rows=torch.randint(0, int(FAKE_LIBRARY_SECONDS * 36), (num_envs,), generator=g),
     )

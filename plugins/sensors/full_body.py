@@ -9,7 +9,10 @@ reference is the kinematically retargeted character motion, so any character has
 ``reference_action`` is the reference's next joint angles as PD-target actions
 (:mod:`retarget.sim.actuation`): an imitator whose actions are this plus a learned residual
 (``ppo`` with ``residual: reference_action``) already moves its joints with the motion before
-training and only has to learn the balance corrections.
+training and only has to learn the balance corrections. With ``feedforward`` the base also
+carries the reference's own inverse-dynamics torque (``SimState.pd_feedforward``): a servo
+aimed at the reference angle alone sags under gravity by ``torque / kp`` and lags by its
+damping, so a residual policy would first have to learn to hold every limb up.
 """
 
 from __future__ import annotations
@@ -107,10 +110,16 @@ class FullBody(Sensor[FullBodyConfig]):
 
 class ReferenceActionConfig(PluginConfig):
     offset: int = Field(1, ge=1, le=360, description="reference frame whose joint angles to use")
+    feedforward: float = Field(
+        0.0, ge=0.0, le=2.0,
+        description="share of the reference's PD feedforward (its inverse-dynamics torque and "
+        "the servo's damping over kp) added to each target; 0 gives the plain joint angles",
+    )  # fmt: skip
 
 
 class ReferenceAction(Sensor[ReferenceActionConfig]):
-    """The reference's joint angles ``offset`` frames ahead as PD-target actions in [-1, 1].
+    """The reference's joint angles ``offset`` frames ahead as PD-target actions in [-1, 1],
+    plus ``feedforward`` x its PD feedforward.
 
     ``target / scale`` per actuator, ``scale`` the larger magnitude of its joint range, clamped
     to the range, exactly the mapping of ``sim.actuation: pd``: the base a residual imitator
@@ -144,7 +153,17 @@ class ReferenceAction(Sensor[ReferenceActionConfig]):
     def observe(self, ctx: StepContext) -> torch.Tensor:
         import torch
         ref = ctx.ref.future[self.config.offset]
-        target = ref.qpos[:, self._qpos] / self._scale
+        target = ref.qpos[:, self._qpos]
+        if self.config.feedforward:
+            if ref.pd_feedforward is None:
+                raise PluginError(
+                    "feedforward needs the reference's pd_feedforward, which this step "
+                    "context's reference state lacks",
+                    plugin=self.name,
+                    hint="set feedforward: 0, or run it in retarget's tracking environment",
+                )
+            target = target + self.config.feedforward * ref.pd_feedforward
+        target = target / self._scale
         return torch.maximum(torch.minimum(target, self._high), self._low).float()
 
 

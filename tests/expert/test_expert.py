@@ -256,8 +256,8 @@ def test_a_clone_learns_only_the_frames_before_the_expert_failed() -> None:
 def test_inverse_feedforward_reaches_the_targets_with_or_without_the_velocity_term(track):
     """``inverse_ff`` adds its share of the reference's torque over kp to the target of the
     rows of the clip being planned, whether ``velocity_ff`` is on or off."""
-    from retarget.expert.inverse import reference_torques
     from retarget.sim.actuation import describe_actuation
+    from retarget.sim.inverse_dynamics import reference_torques
 
     env, _ = track
     half = BeamTracker(env, ExpertConfig(**SMALL, velocity_ff=0.0, inverse_ff=0.5))

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from retarget.env.build import env_from_recipe
-from retarget.expert.inverse import reference_torques, subtree_masks
 from retarget.motion.bvh_write import write_bvh
 from retarget.motion.procedural import idle_clip
 from retarget.recipe import load
 from retarget.registry.loader import load_plugins
 from retarget.sim.actuation import describe_actuation
+from retarget.sim.inverse_dynamics import reference_torques, subtree_masks
 
 
 @pytest.fixture(scope="module")
