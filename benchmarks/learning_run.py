@@ -85,7 +85,10 @@ def read_metrics(run: Path) -> list[dict[str, float]]:
         return [{k: float(v) for k, v in r.items() if v} for r in csv.DictReader(f)]
 
 
-def plot(runs: list[Path], png: Path) -> None:
+def plot(runs: list[Path], png: Path, x: str = "steps") -> None:
+    """Training curves of ``runs`` side by side against environment steps (``x="steps"``) or
+    the minutes each run had spent (``x="minutes"``: equal CPU time when the runs shared the
+    machine alike)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -102,13 +105,14 @@ def plot(runs: list[Path], png: Path) -> None:
         rows = read_metrics(run)
         label = run.resolve().parent.name
         minutes = [r.get("elapsed_s", r["step"] / r["steps_per_s_total"]) / 60 for r in rows]
-        steps = [r["step"] / 1e6 for r in rows]
+        along = minutes if x == "minutes" else [r["step"] / 1e6 for r in rows]
         for ax, (key, title) in zip(axes, panels, strict=True):
-            pts = [(s, r[key]) for s, r in zip(steps, rows, strict=True) if key in r]
+            pts = [(s, r[key]) for s, r in zip(along, rows, strict=True) if key in r]
             if pts:
                 ax.plot(*zip(*pts, strict=True), label=f"{label} ({minutes[-1]:.0f} min)")
             ax.set_title(title)
-            ax.set_xlabel("environment steps (millions)")
+            ax.set_xlabel("minutes of training" if x == "minutes"
+                          else "environment steps (millions)")  # fmt: skip
             ax.grid(alpha=0.3)
     axes[0].legend()
     fig.tight_layout()
@@ -154,6 +158,8 @@ def main() -> None:
     parser.add_argument("--run", help="evaluate and plot this finished run instead of training")
     parser.add_argument("--plot", nargs="+", help="only draw the curves of these runs")
     parser.add_argument("--png", help="curves image (default: OUT/NAME-curves.png)")
+    parser.add_argument("--x", choices=("steps", "minutes"), default="steps",
+                        help="curves against environment steps or minutes of training")
     parser.add_argument("--compare", nargs="+", help="A/B table of these runs at equal steps")
     parser.add_argument("--marks", type=float, nargs="+", default=[0.5, 1, 2, 3, 4],
                         help="--compare: millions of environment steps")
@@ -164,7 +170,7 @@ def main() -> None:
         print(compare([Path(p) for p in args.compare], args.marks))
         return
     if args.plot:
-        plot([Path(p) for p in args.plot], Path(args.png or out / "curves.png"))
+        plot([Path(p) for p in args.plot], Path(args.png or out / "curves.png"), args.x)
         return
     dirs = link_split(out)
     name = f"{args.character}-{args.sensors}"
