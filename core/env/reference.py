@@ -94,9 +94,9 @@ class CharacterReference:
         actuation up."""
         kp = -np.asarray(model.actuator_biasprm[:, 1], dtype=np.float64)
         kd = -np.asarray(model.actuator_biasprm[:, 2], dtype=np.float64)
-        servo = (kp > 0) & (self._actuator_dofs >= 0)
-        gain = np.where(servo, kp, 1.0)
         dofs = self._actuator_dofs
+        servo = (kp > 0) & (dofs >= 0)
+        gain = np.where(servo, kp, 1.0)
         qd = np.where(dofs >= 0, self.qvel64[:, np.maximum(dofs, 0)], 0.0)
         limited = np.asarray(model.actuator_forcelimited, dtype=bool)
         reach = np.where(limited, np.asarray(model.actuator_forcerange[:, 1]) / gain, np.inf)
@@ -140,7 +140,8 @@ def _compute(
     contact_margin: float,
     mocap: Sequence[tuple[np.ndarray, np.ndarray] | None] | None,
 ) -> dict[str, np.ndarray]:
-    """Retargeting, velocities, forward kinematics and contact labels of every frame."""
+    """Retargeting, velocities, joint torques, forward kinematics and contact labels of
+    every frame."""
     qpos_parts, qvel_parts, torque_parts = [], [], []
     dofs = _actuator_dofs(model)
     joints = np.asarray(model.actuator_trnid[:, 0], dtype=np.intp)[dofs >= 0]

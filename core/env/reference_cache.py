@@ -1,11 +1,12 @@
 """The kinematic reference of a motion library cached on disk by content.
 
-Retargeting every frame of a corpus onto a character and running forward kinematics over it
-costs about 25 s per hour of motion; it depends only on the compiled model, the joint map, the
-clips (at the control rate), the contact margin and the scene's mocap placements, so the
-result is stored under the hash of exactly those as an ``.npz`` of plain arrays (read back
-with ``allow_pickle=False``, so a cache file runs no code). Small libraries (tests, a handful
-of clips) are not worth a file and are always computed.
+Retargeting every frame of a corpus onto a character, its joint torques and forward
+kinematics over it cost about 33 s per hour of motion (8 s of it the torques); they depend
+only on the compiled model, the joint map, the clips (at the control rate), the contact
+margin and the scene's mocap placements, so the result is stored under the hash of exactly
+those as an ``.npz`` of plain arrays (read back with ``allow_pickle=False``, so a cache file
+runs no code). Small libraries (tests, a handful of clips) are not worth a file and are
+always computed.
 """
 
 from __future__ import annotations
