@@ -164,6 +164,48 @@ class GoodCallback(retarget.Callback):
         self.seen = getattr(self, "seen", 0) + 1
 
 
+class GoodPlanner(retarget.Planner):
+    """Steps the reference's joint angles as PD targets, open loop."""
+
+    name = "good_planner"
+
+    def perturb(self, targets: np.ndarray) -> np.ndarray:
+        """The actions stepped."""
+        return targets
+
+    def report(self, stepped: np.ndarray) -> np.ndarray:
+        """The actions returned."""
+        return stepped
+
+    def track(self, env, clip, *, seconds=None, threads=1, progress=None):
+        from retarget.expert.track import Track
+
+        sim, lay, ref = env.sim, env.layout, env.reference
+        fps = 1.0 / sim.settings.control_dt
+        start, length = int(env.library.start[clip]), int(env.library.length[clip])
+        if seconds is not None:
+            length = max(2, min(length, round(seconds * fps) + 1))
+        env.place(torch.tensor([clip]), torch.tensor([0]))
+        ranges = np.asarray(lay.actuator_ranges, dtype=np.float64).reshape(-1, 2)
+        scale = np.abs(ranges).max(axis=1)
+        rows = start + np.arange(1, length)
+        targets = ref.qpos64[rows][:, np.asarray(lay.actuator_qpos)] / scale
+        stepped = np.clip(self.perturb(targets), -1, 1)
+        qpos, qvel = [sim.raw("qpos")[0].copy()], [sim.raw("qvel")[0].copy()]
+        body = [sim.state.body_pos[0].numpy().copy()]
+        for action in stepped:
+            sim.step(action[None])
+            qpos.append(sim.raw("qpos")[0].copy())
+            qvel.append(sim.raw("qvel")[0].copy())
+            body.append(sim.state.body_pos[0].numpy().copy())
+        frames = start + np.arange(length)
+        return Track(clip=env.library.names[clip], fps=fps,
+                     actions=self.report(stepped).astype(np.float32), qpos=np.stack(qpos),
+                     qvel=np.stack(qvel), body_pos=np.stack(body),
+                     ref_body_pos=ref.arrays["body_pos"][frames].numpy(),
+                     ref_qpos0=ref.qpos64[start].copy(), cpu_seconds=0.0)  # fmt: skip
+
+
 GOOD = [
     GoodReward,
     GoodTermination,
@@ -175,6 +217,7 @@ GOOD = [
     GoodFormat,
     GoodCommand,
     GoodCallback,
+    GoodPlanner,
 ]
 
 
@@ -226,3 +269,8 @@ def register_commands(register) -> None:
 @retarget.hookimpl
 def register_callbacks(register) -> None:
     register(GoodCallback)
+
+
+@retarget.hookimpl
+def register_planners(register) -> None:
+    register(GoodPlanner)

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import contract_doubles as d
 import mujoco
+import numpy as np
 import pytest
 import torch
 from doubles_outside_toolkit import Internal
@@ -332,6 +333,24 @@ class Meddler(d.GoodCallback):
         stats["loss"] = 0.0
 
 
+class Misreported(d.GoodPlanner):
+    """Reports actions other than the ones it stepped."""
+
+    name = "misreported"
+
+    def report(self, stepped):
+        return np.clip(stepped + 0.2, -1, 1)
+
+
+class Restless(d.GoodPlanner):
+    """Plans each call with fresh randomness."""
+
+    name = "restless"
+
+    def perturb(self, targets):
+        return targets + np.random.default_rng().normal(0.0, 0.01, targets.shape)
+
+
 BROKEN = [
     (checks.check_name, BadName),
     (checks.check_docstring, NoDoc),
@@ -367,6 +386,8 @@ BROKEN = [
     (checks.check_motion_format_rejects_garbage, LeakyErrors),
     (checks.check_command_arguments, TwoArgRun),
     (checks.check_callback_events, Meddler),
+    (checks.check_planner_tracks, Misreported),
+    (checks.check_planner_deterministic, Restless),
 ]
 
 

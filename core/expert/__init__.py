@@ -2,13 +2,16 @@
 
 :class:`~retarget.expert.beam.BeamTracker` plans PD-target actions in the env's own action
 space with the simulator itself (a sampling beam search over the reference, SAMCON-style);
+:class:`~retarget.expert.ilqr.IlqrRefiner` improves such a path with the dynamics'
+derivatives (iLQR); the built-in planners (``retarget plugins``) use them;
 :mod:`retarget.expert.store` writes what it found per clip (states, actions, the beam's
 alternative segments and a report) so that policies learn from it by supervised learning
 (``retarget train --expert DIR``). ``retarget expert`` runs it over clips, folders and
 archives, in parallel and resumably.
 """
 
-from retarget.expert.beam import BeamTracker, Track
+from retarget.expert.beam import BeamTracker
 from retarget.expert.config import ExpertConfig
+from retarget.expert.track import Track
 
 __all__ = ["BeamTracker", "ExpertConfig", "Track"]

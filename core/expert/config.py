@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from retarget.kinds.base import PluginConfig
+
 ADDED_LATER: dict[str, object] = {"inverse_ff": 0.0, "inverse_support": False}
 """Planner fields added after expert directories were written, with the value that plans as
 before: a field at that value is left out of a directory's settings key, so a directory
@@ -43,11 +45,9 @@ class Rescue(BaseModel):
     running: float = Field(0.0, ge=0, le=100, description="the rescue's running weight")
 
 
-class ExpertConfig(BaseModel):
+class ExpertConfig(PluginConfig):
     """Beam-search tracking over PD targets; the defaults were chosen on training-style walks
     (``benchmarks/results/expert_*.md`` has the comparisons)."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
     samples: int = Field(512, ge=2, le=65_536, description="rollouts per segment")
     beam: int = Field(64, ge=1, le=4096, description="states kept after each segment")

@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 from retarget.errors import RecipeError
-from retarget.expert.beam import Track
 from retarget.expert.config import ADDED_LATER
+from retarget.expert.track import Track
 
 VERSION = 1
 HEADER = "expert.json"
@@ -45,11 +45,15 @@ def clip_name(path: Path, taken: set[str]) -> str:
 
 
 def settings_key(header: Mapping[str, Any]) -> str:
-    """Hash of what decides a clip's plan (recipe and planner settings); planner fields of
-    :data:`ADDED_LATER` at their old behaviour's value are left out."""
+    """Hash of what decides a clip's plan (recipe, planner and its settings); planner fields
+    of :data:`ADDED_LATER` at their old behaviour's value are left out, and so is the planner
+    when it is ``beam`` (directories written before planners were plugins)."""
     planner = {k: v for k, v in dict(header["planner"]).items()
                if k not in ADDED_LATER or v != ADDED_LATER[k]}  # fmt: skip
-    blob = json.dumps({"recipe": header["recipe"], "planner": planner}, sort_keys=True)
+    decides: dict[str, Any] = {"recipe": header["recipe"], "planner": planner}
+    if header.get("method", "beam") != "beam":
+        decides["method"] = header["method"]
+    blob = json.dumps(decides, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
 
 

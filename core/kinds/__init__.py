@@ -9,6 +9,7 @@ from retarget.kinds.character import REQUIRED_GROUPS, REQUIRED_SITES, Character
 from retarget.kinds.command import Command
 from retarget.kinds.iteration import IterationResult
 from retarget.kinds.motion_format import MotionFormat
+from retarget.kinds.planner import Planner
 from retarget.kinds.reward import RewardConfig, RewardTerm, gaussian_kernel
 from retarget.kinds.scene import Scene
 from retarget.kinds.sensor import Observer, ObsSpec, RecordedStream, Sensor
@@ -27,6 +28,7 @@ KINDS: dict[str, type[Plugin]] = {
     "motion_format": MotionFormat,
     "command": Command,
     "callback": Callback,
+    "planner": Planner,
 }
 """Kind name -> base class. The registry, recipes and contract suite are all keyed by these."""
 
@@ -43,6 +45,7 @@ __all__ = [
     "MotionFormat",
     "ObsSpec",
     "Observer",
+    "Planner",
     "Plugin",
     "PluginConfig",
     "RecordedStream",

@@ -86,6 +86,11 @@ def register_callbacks(register: Registrar) -> None:
     """Register :class:`retarget.kinds.Callback` subclasses (training loggers and monitors)."""
 
 
+@hookspec
+def register_planners(register: Registrar) -> None:
+    """Register :class:`retarget.kinds.Planner` subclasses (tracking experts, no training)."""
+
+
 HOOK_KINDS: dict[str, str] = {
     "register_characters": "character",
     "register_sensors": "sensor",
@@ -97,5 +102,6 @@ HOOK_KINDS: dict[str, str] = {
     "register_motion_formats": "motion_format",
     "register_commands": "command",
     "register_callbacks": "callback",
+    "register_planners": "planner",
 }
 """Hook name -> plugin kind it registers."""

@@ -590,6 +590,55 @@ def check_command_arguments(plugin: object) -> None:
     assert len(inspect.signature(cmd.run).parameters) == 1, "run takes exactly (args)"
 
 
+# ---------------------------------------------------------------- planners
+
+
+def _planned(plugin: object):
+    from retarget.testing.fakes import planning_env
+
+    env = planning_env()
+    return env, make(plugin).track(env, 0, seconds=0.25, threads=1)
+
+
+def check_planner_tracks(plugin: object) -> None:
+    """A quarter second of a generated walk: the path has one action per step, finite states
+    of the whole model, actions in [-1, 1], the reference's bodies beside its own, and the
+    actions stepped in the env from the placed first frame reproduce its states."""
+    from retarget.expert.track import Track
+
+    env, track = _planned(plugin)
+    assert isinstance(track, Track), f"track() returned {type(track).__name__}, not a Track"
+    T, sim = track.frames, env.sim
+    assert 2 <= T <= 10, f"0.25 s at 36 Hz is at most 10 frames, got {T}"
+    assert track.actions.shape == (T - 1, env.action_dim), f"actions {track.actions.shape}"
+    assert track.qpos.shape == (T, sim.raw("qpos").shape[1]), f"qpos {track.qpos.shape}"
+    assert track.qvel.shape == (T, sim.raw("qvel").shape[1]), f"qvel {track.qvel.shape}"
+    bodies = len(env.layout.body_ids)
+    for name in ("body_pos", "ref_body_pos"):
+        shape = getattr(track, name).shape
+        assert shape == (T, bodies, 3), f"{name} {shape} != {(T, bodies, 3)}"
+    for name in ("actions", "qpos", "qvel", "body_pos"):
+        assert np.isfinite(getattr(track, name)).all(), f"non-finite {name}"
+    assert np.abs(track.actions).max() <= 1.0 + 1e-6, "actions outside [-1, 1]"
+    env.place(torch.tensor([0]), torch.tensor([0]))
+    assert np.allclose(sim.raw("qpos")[0], track.qpos[0], atol=1e-6), (
+        "frame 0 is not the env's placed first frame"
+    )
+    for t, action in enumerate(track.actions):
+        sim.step(action[None].astype(np.float64))
+        gap = float(np.abs(sim.raw("qpos")[0] - track.qpos[t + 1]).max())
+        assert gap < 1e-4, f"replaying the actions leaves the path at step {t} (by {gap:.2e})"
+    figures = track.metrics()
+    assert {"success_clip", "mpjpe_mm", "cpu_s_per_motion_s"} <= set(figures), figures
+
+
+def check_planner_deterministic(plugin: object) -> None:
+    """The same planner settings plan the same actions twice (resumed runs rely on it)."""
+    _, first = _planned(plugin)
+    _, second = _planned(plugin)
+    assert np.array_equal(first.actions, second.actions), "two plans of one clip differ"
+
+
 # ---------------------------------------------------------------- the table
 
 
@@ -643,6 +692,7 @@ BY_KIND: dict[str, tuple[Check, ...]] = {
     "motion_format": (check_motion_format_reads_sample, check_motion_format_rejects_garbage),
     "command": (check_command_arguments,),
     "callback": (check_callback_events,),
+    "planner": (check_planner_tracks, check_planner_deterministic),
 }
 
 

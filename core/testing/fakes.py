@@ -309,3 +309,20 @@ def kinematic_env():
     walk = walk.with_(root_pos=walk.root_pos[:60], local_rot=walk.local_rot[:60],
                       contacts=walk.contacts[:60])  # fmt: skip
     return RetargetEnv(human, [walk], sensors=[sensor], options=EnvOptions(num_envs=1))
+
+
+def planning_env():
+    """A real one-environment human env with PD servos over one second of generated walking,
+    no sensors: what planners (``retarget expert``) are checked on."""
+    from retarget.env import RetargetEnv
+    from retarget.motion.procedural import default_motions
+    from retarget.registry.loader import load_plugins
+    from retarget.settings.env import EnvOptions
+    from retarget.settings.sim import SimSettings
+
+    human = load_plugins().get("character", "human").cls()
+    walk = default_motions(names=("walk",))[0]
+    walk = walk.with_(root_pos=walk.root_pos[:30], local_rot=walk.local_rot[:30],
+                      contacts=walk.contacts[:30])  # fmt: skip
+    return RetargetEnv(human, [walk], options=EnvOptions(num_envs=1),
+                       sim=SimSettings(actuation="pd"))  # fmt: skip

@@ -40,8 +40,8 @@ TOOLKIT: dict[str, str] = {
     "retarget.motion.bvh_write": "writing clips as BVH",
     "retarget.motion.camera_rigs": "headset camera rigs (where the tracking cameras sit)",
     "retarget.motion.scene_fit": "fitting props to where a clip sits and steps",
-    "retarget.expert.*": "the tracking expert (beam-search planner) and its files, for planners "
-    "and students that learn from it",
+    "retarget.expert.*": "tracking experts (paths, beam search, iLQR refinement) and their files, "
+    "for planners and students that learn from them",
     "retarget.learn.*": "building blocks of algorithm plugins (networks, PPO, DAgger, ...)",
     "retarget.env": "the tracking environment (``RetargetEnv``, ``random_actions``)",
     "retarget.env.build": "building an environment from a resolved recipe",

@@ -45,7 +45,6 @@ def plan_clip(job: dict[str, Any]) -> dict[str, Any]:
 
     from retarget import load_plugins
     from retarget.env.build import env_from_recipe
-    from retarget.expert import BeamTracker, ExpertConfig
     from retarget.expert.store import write_track
     from retarget.recipe import load
 
@@ -54,14 +53,16 @@ def plan_clip(job: dict[str, Any]) -> dict[str, Any]:
     resolved = load(job["recipe"], registry, shorthands={**job["shorthands"],
                     "motions": job["path"]}, assignments=job["assignments"])  # fmt: skip
     env = env_from_recipe(resolved, registry=registry, num_envs=1, threads=job["threads"])
-    tracker = BeamTracker(env, ExpertConfig(**job["planner"]), threads=job["threads"])
-    track = tracker.track(0, seconds=job["seconds"], progress=job.get("progress"))
+    cls = registry.get("planner", job["method"]).cls
+    planner = cls(cls.Config.model_validate(job["planner"]))
+    track = planner.track(env, 0, seconds=job["seconds"], threads=job["threads"],
+                          progress=job.get("progress"))  # fmt: skip
     out = Path(job["out"])
     return write_track(out, job["name"], track, {"key": job["key"], "source": job["path"]})
 
 
 class ExpertCommand(Command):
-    """Track motion clips with a beam-search planner over PD targets; no training."""
+    """Track motion clips with a planner plugin over PD targets; no training."""
 
     name = "expert"
     help = "track clips by trajectory optimisation (no training); data for students"
@@ -76,9 +77,14 @@ class ExpertCommand(Command):
         parser.add_argument("--scene", help="scene plugin name")
         add_pick_flags(parser)
         add_set_flag(parser, "override a recipe field, e.g. --set sim.substeps=8")
+        parser.add_argument("--method", default="beam",
+                            help="planner plugin (`retarget plugins`): beam "
+                            "(sampling beam search, the default) or beam_ilqr (its path "
+                            "refined by iLQR)")
         parser.add_argument("--planner", action="append", default=[], metavar="KEY=VALUE",
-                            help="planner setting, e.g. --planner samples=512 "
-                            "(retarget.expert.config.ExpertConfig)")
+                            help="planner setting, e.g. --planner samples=512 for beam, "
+                            "--planner ilqr.iterations=8 for beam_ilqr "
+                            "(`retarget plugins show planner NAME`)")
         parser.add_argument("--seconds", type=float, default=None,
                             help="plan at most this much of each clip")
         parser.add_argument("--max-clips", type=int, default=None, help="plan the first N clips")
@@ -94,8 +100,7 @@ class ExpertCommand(Command):
         from rich.progress import Progress
 
         from retarget.commands.recipe_args import patterns
-        from retarget.errors import RecipeError
-        from retarget.expert import ExpertConfig
+        from retarget.errors import PluginError, RecipeError
         from retarget.expert.store import (
             clip_name,
             done_clips,
@@ -112,9 +117,14 @@ class ExpertCommand(Command):
             console.print("retarget expert: --jobs, --threads and --seconds must be positive")
             return 2
         try:
-            planner = ExpertConfig(**_overrides(args.planner))
+            method = self.plugins().get("planner", args.method).cls
+        except PluginError as exc:
+            console.print(f"retarget expert: --method: {exc}")
+            return 2
+        try:
+            planner = method.Config.model_validate(_overrides(args.planner))
         except ValidationError as exc:
-            console.print(f"retarget expert: --planner: {exc}")
+            console.print(f"retarget expert: --planner ({args.method}): {exc}")
             return 2
         files = select(expand(args.clips, SUFFIXES), patterns(args.include) or (),
                        patterns(args.exclude) or ())  # fmt: skip
@@ -130,7 +140,7 @@ class ExpertCommand(Command):
         recipe["motions"] = {**recipe["motions"], "path": None, "include": [], "exclude": []}
         out = Path(args.out)
         header = {"recipe": recipe, "planner": planner.model_dump(mode="json"),
-                  "character": recipe["character"]}  # fmt: skip
+                  "character": recipe["character"], "method": args.method}  # fmt: skip
         write_header(out, header)
         key = settings_key(header)
         done = done_clips(out, key)
@@ -146,6 +156,7 @@ class ExpertCommand(Command):
             jobs.append({
                 "recipe": args.recipe, "shorthands": shorthands, "assignments": args.assignments,
                 "path": str(target), "name": name, "planner": planner.model_dump(mode="json"),
+                "method": args.method,
                 "seconds": args.seconds, "threads": args.threads, "out": str(out), "key": key,
             })  # fmt: skip
         figures = dict(done)

@@ -1,0 +1,1 @@
+"""Built-in planners: tracking experts that need no training (``retarget expert``)."""

@@ -1,0 +1,105 @@
+"""iLQR refinement of a planned path and the planner plugins: real MuJoCo physics."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from retarget.env.build import env_from_recipe
+from retarget.expert import BeamTracker, ExpertConfig
+from retarget.expert.ilqr import IlqrConfig, IlqrRefiner
+from retarget.expert.store import settings_key
+from retarget.motion.bvh_write import write_bvh
+from retarget.motion.procedural import idle_clip
+from retarget.recipe import load
+from retarget.registry.loader import load_plugins
+
+SLOPPY = {"samples": 16, "beam": 2, "keep": 0, "sigma": 0.4}
+"""A beam with few, noisy samples: a path that stays up with room to improve."""
+
+
+@pytest.fixture(scope="module")
+def planned(tmp_path_factory):
+    registry = load_plugins()
+    clip = write_bvh(idle_clip(1.0), tmp_path_factory.mktemp("clips") / "idle.bvh")
+    recipe = load("teacher", registry, shorthands={"motions": str(clip)},
+                  assignments=["env.num_envs=1"])  # fmt: skip
+    env = env_from_recipe(recipe, registry=registry, threads=1)
+    path = BeamTracker(env, ExpertConfig(**SLOPPY)).track(0, seconds=0.5)
+    refiner = IlqrRefiner(env, IlqrConfig(iterations=4, chunk=6), threads=1)
+    return env, path, refiner, refiner.refine(0, path)
+
+
+def test_refinement_lowers_the_simulated_cost_and_the_pose_error(planned) -> None:
+    _, path, refiner, refined = planned
+    history = refiner.history
+    assert history and any(h["trial"] < h["cost"] for h in history), history
+    first, last = history[0]["cost"], min(min(h["trial"], h["cost"]) for h in history)
+    assert last < 0.9 * first, history
+    before, after = path.metrics(), refined.metrics()
+    assert after["success_clip"] and after["mpjpe_mm"] < before["mpjpe_mm"], (before, after)
+    assert refined.cpu_seconds > path.cpu_seconds
+
+
+def test_the_refined_actions_replay_to_its_states(planned) -> None:
+    import torch
+
+    env, _, _, refined = planned
+    env.place(torch.tensor([0]), torch.tensor([0]))
+    for t, action in enumerate(refined.actions):
+        env.sim.step(action[None].astype(np.float64))
+        assert np.abs(env.sim.raw("qpos")[0] - refined.qpos[t + 1]).max() < 1e-4, t
+    assert np.allclose(env.sim.state.body_pos[0].numpy(), refined.body_pos[-1], atol=1e-4)
+
+
+def test_no_round_that_raises_the_cost_is_kept(planned) -> None:
+    """With steps far too long (damping near zero, one full step) the refinement must return
+    the path it was given rather than a worse one."""
+    env, path, _, _ = planned
+    reckless = IlqrRefiner(env, IlqrConfig(iterations=2, alphas=(50.0,), regularization=1e-6,
+                                           chunk=6), threads=1)  # fmt: skip
+    out = reckless.refine(0, path)
+    kept = [h for h in reckless.history if h["trial"] < h["cost"]]
+    if not kept:
+        assert np.array_equal(out.actions, path.actions)
+    assert out.metrics()["mpjpe_mm"] <= path.metrics()["mpjpe_mm"] + 1e-3
+
+
+def test_the_planner_joins_the_directory_settings() -> None:
+    """``beam`` keeps the key that directories written before planners were plugins have
+    (they resume); another planner has its own."""
+    header = {"recipe": {"character": "human"}, "planner": ExpertConfig().model_dump(mode="json")}
+    assert settings_key({**header, "method": "beam"}) == settings_key(header)
+    assert settings_key({**header, "method": "beam_ilqr"}) != settings_key(header)
+
+
+def _cli(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "retarget", *args], cwd=cwd,
+                          capture_output=True, text=True, timeout=600)  # fmt: skip
+
+
+def test_cli_plans_with_a_planner_plugin_and_names_bad_ones(tmp_path) -> None:
+    clip = write_bvh(idle_clip(1.0), tmp_path / "idle.bvh")
+    out = tmp_path / "expert"
+    sets = ["--planner=beam.samples=16", "--planner=beam.beam=2", "--planner=beam.keep=0",
+            "--planner=ilqr.iterations=1", "--planner=ilqr.chunk=6"]
+    done = _cli("expert", str(clip), "--out", str(out), "--seconds", "0.3", "--method",
+                "beam_ilqr", *sets, cwd=tmp_path)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert json.loads((out / "expert.json").read_text())["method"] == "beam_ilqr"
+    assert json.loads((out / "report.json").read_text())["summary"]["clips"] == 1
+    unknown = _cli("expert", str(clip), "--out", str(tmp_path / "x"), "--method", "bean",
+                   cwd=tmp_path)  # fmt: skip
+    assert unknown.returncode == 2 and "did you mean 'beam'" in unknown.stderr
+    wrong = _cli("expert", str(clip), "--out", str(tmp_path / "y"), "--method", "beam_ilqr",
+                 "--planner", "samples=16", cwd=tmp_path)  # fmt: skip
+    assert wrong.returncode == 2 and "beam_ilqr" in wrong.stderr and "samples" in wrong.stderr
+    beam = ["--planner=samples=16", "--planner=beam=2", "--planner=keep=0"]
+    other = _cli("expert", str(clip), "--out", str(out), "--seconds", "0.3", *beam,
+                 cwd=tmp_path)  # fmt: skip
+    assert other.returncode != 0 and "expert.json" in other.stderr  # planned by beam_ilqr
