@@ -8,6 +8,11 @@ CPU-seconds per motion-second of each stage (the beam's as its directory recorde
 
     python benchmarks/expert_refine.py runs/expert-heldout-p2 runs/expert-heldout-p2b \
         --out results/expert_refine.json [--set iterations=8] [--max-clips 2]
+
+``--write DIR`` (one source directory) also writes the refined paths as an expert directory,
+the one ``retarget expert --method beam_ilqr`` with the source's beam settings writes (the
+beam's other members kept as demonstrations), which ``retarget train --expert DIR`` reads;
+it resumes clip by clip.
 """
 
 from __future__ import annotations
@@ -22,20 +27,42 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-KINDS = {"walk-turn": "turn", "walk": "walk", "run": "run"}
+KINDS = {"_walk-turn": "turn", "_walk_": "walk", "_run_": "run"}
+"""Name parts of the corpus's motions -> kind (as ``heldout_eval.py`` groups them)."""
 
 
 def kind_of(name: str) -> str:
-    for key, kind in KINDS.items():
-        if f"_{key}_" in name:
+    for part, kind in KINDS.items():
+        if part in name:
             return kind
     return "gesture"
 
 
-def refine_dir(root: Path, overrides: dict, max_clips: int | None) -> list[dict]:
+def target_dir(root: Path, write: Path, overrides: dict) -> str:
+    """Start ``write`` as ``beam_ilqr``'s directory for ``root``'s clips; its settings key."""
+    import shutil
+
+    from retarget.expert.ilqr import IlqrConfig
+    from retarget.expert.store import read_header, settings_key, write_header
+
+    header = read_header(root)
+    planner = {"beam": header["planner"],
+               "ilqr": IlqrConfig(**overrides).model_dump(mode="json")}  # fmt: skip
+    new = {"recipe": header["recipe"], "planner": planner, "character": header["character"],
+           "method": "beam_ilqr"}  # fmt: skip
+    write_header(write, new)
+    for motion in (root / "motions").iterdir():
+        if not (write / "motions" / motion.name).exists():
+            shutil.copyfile(motion, write / "motions" / motion.name)
+    return settings_key(new)
+
+
+def refine_dir(root: Path, overrides: dict, max_clips: int | None,
+               write: Path | None = None) -> list[dict]:
     from retarget.env.build import env_from_recipe
     from retarget.expert.ilqr import IlqrConfig, IlqrRefiner
-    from retarget.expert.store import load_track, read_header
+    from retarget.expert.store import done_clips, load_track, read_header, write_report
+    from retarget.expert.store import write_track as store_track
     from retarget.expert.track import Track
     from retarget.recipe import load
     from retarget.registry.loader import load_plugins
@@ -43,12 +70,16 @@ def refine_dir(root: Path, overrides: dict, max_clips: int | None) -> list[dict]
     registry = load_plugins(strict=False)
     header = read_header(root)
     report = json.loads((root / "report.json").read_text())["clips"]
+    key = target_dir(root, write, overrides) if write else ""
+    written = done_clips(write, key) if write else {}
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         recipe_file = Path(tmp) / "recipe.yaml"
         recipe_file.write_text(yaml.safe_dump(header["recipe"]))
         for name in list(report)[:max_clips]:
             before = report[name]
+            if name in written:
+                continue
             motion = next((root / "motions").glob(f"{name}.*"))
             recipe = load(recipe_file, registry, shorthands={"motions": str(motion)},
                           assignments=["env.num_envs=1", "sim.threads=1"])  # fmt: skip
@@ -57,15 +88,20 @@ def refine_dir(root: Path, overrides: dict, max_clips: int | None) -> list[dict]
             shapes = {k: tuple(sim.raw(k).shape[1:]) for k in sim.STATE_FIELDS}
             data = load_track(root / "clips" / f"{name}.npz", nq=shapes["qpos"][0],
                               nv=shapes["qvel"][0], nu=env.layout.nu, state_shapes=shapes)
+            demos = {k[5:]: v for k, v in data.items() if k.startswith("demo_")}
             track = Track(clip=name, fps=float(data["fps"]), actions=data["actions"],
                           qpos=data["qpos"], qvel=data["qvel"], body_pos=data["body_pos"],
                           ref_body_pos=data["ref_body_pos"], ref_qpos0=data["ref_qpos0"],
-                          cpu_seconds=0.0)  # fmt: skip
+                          cpu_seconds=before["cpu_seconds"], demos=demos)  # fmt: skip
             refiner = IlqrRefiner(env, IlqrConfig(**overrides), threads=1)
             cpu0 = time.process_time()
             refined = refiner.refine(0, track)
             spent = time.process_time() - cpu0
             after = refined.metrics()
+            if write:
+                written[name] = store_track(write, name, refined,
+                                            {"key": key, "source": before.get("source")})
+                write_report(write, written)
             seconds = after["motion_seconds"]
             rows.append({
                 "clip": name, "kind": kind_of(name), "motion_seconds": seconds,
@@ -85,20 +121,11 @@ def refine_dir(root: Path, overrides: dict, max_clips: int | None) -> list[dict]
     return rows
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("dirs", nargs="+", type=Path, help="expert directories (beam paths)")
-    parser.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
-                        help="refinement setting (retarget.expert.ilqr.IlqrConfig)")
-    parser.add_argument("--max-clips", type=int, default=None, help="per directory")
-    parser.add_argument("--out", type=Path, default=None, help="JSON of the figures")
-    args = parser.parse_args()
-    overrides = {}
-    for pair in args.sets:
-        key, _, value = pair.partition("=")
-        overrides[key] = yaml.safe_load(value)
-    rows = [r for d in args.dirs for r in refine_dir(d, overrides, args.max_clips)]
+def summarise(rows: list[dict]) -> dict[str, dict]:
+    """Per kind: clips, the beam's and the refined means, each stage's CPU-s per motion-s."""
     summary = {}
+    for row in rows:
+        row["kind"] = kind_of(row["clip"])
     for kind in ("walk", "turn", "run", "gesture"):
         mine = [r for r in rows if r["kind"] == kind]
         if not mine:
@@ -118,6 +145,27 @@ def main() -> int:
             "refine_cpu_s_per_motion_s": sum(r["refine_cpu_s_per_motion_s"] * r["motion_seconds"]
                                              for r in mine) / secs,
         }
+    return summary
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("dirs", nargs="+", type=Path, help="expert directories (beam paths)")
+    parser.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
+                        help="refinement setting (retarget.expert.ilqr.IlqrConfig)")
+    parser.add_argument("--max-clips", type=int, default=None, help="per directory")
+    parser.add_argument("--out", type=Path, default=None, help="JSON of the figures")
+    parser.add_argument("--write", type=Path, default=None,
+                        help="write the refined paths as an expert directory (one source)")
+    args = parser.parse_args()
+    if args.write and len(args.dirs) != 1:
+        parser.error("--write takes one source directory")
+    overrides = {}
+    for pair in args.sets:
+        key, _, value = pair.partition("=")
+        overrides[key] = yaml.safe_load(value)
+    rows = [r for d in args.dirs for r in refine_dir(d, overrides, args.max_clips, args.write)]
+    summary = summarise(rows)
     print(f"\n{'kind':8} {'clips':>5} {'success':>15} {'MPJPE mm':>15} {'G-MPJPE mm':>15} "
           f"{'CPU-s/motion-s':>16}")
     for kind, s in summary.items():

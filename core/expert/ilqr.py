@@ -8,6 +8,13 @@ a forward pass with the feedback gains that keeps the rollout near the nominal p
 moves. A step is only kept when the real simulation's cost falls, so the refined path is never
 worse than the one it started from, and it is still a rollout of the env's own physics.
 
+It works in windows, as model-predictive control does: 18 control steps (half a second)
+optimised from the refined path's state at the window's start, 6 of them kept, the rest of
+the path re-rolled from there. A linear model of a whole clip does not hold: through a few
+seconds of contacts a small change early moves everything after it, so the whole-path model
+promised several times the decrease a step delivered and refined a training-style walk from 43 to
+41 mm; windows of half a second brought it to 20 mm (``benchmarks/results/expert_ilqr_*.md``).
+
 Derivatives are finite differences of one whole control step (``sim.substeps`` MuJoCo steps
 with the env's PD servos) taken as one batch: every state of the path copied ``1 + 2 nv + nu``
 times, each copy nudged along one state or action coordinate, all stepped together on MuJoCo's

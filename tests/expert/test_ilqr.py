@@ -58,11 +58,11 @@ def test_the_refined_actions_replay_to_its_states(planned) -> None:
 
 
 def test_no_round_that_raises_the_cost_is_kept(planned) -> None:
-    """With steps far too long (damping near zero, one full step) the refinement must return
-    the path it was given rather than a worse one."""
+    """With steps far too long (damping near zero, fifty times the model's step, the whole
+    path at once) the refinement must return the path it was given rather than a worse one."""
     env, path, _, _ = planned
     reckless = IlqrRefiner(env, IlqrConfig(iterations=2, alphas=(50.0,), regularization=1e-6,
-                                           chunk=6), threads=1)  # fmt: skip
+                                           chunk=6, window=0), threads=1)  # fmt: skip
     out = reckless.refine(0, path)
     kept = [h for h in reckless.history if h["trial"] < h["cost"]]
     if not kept:
@@ -103,3 +103,33 @@ def test_cli_plans_with_a_planner_plugin_and_names_bad_ones(tmp_path) -> None:
     other = _cli("expert", str(clip), "--out", str(out), "--seconds", "0.3", *beam,
                  cwd=tmp_path)  # fmt: skip
     assert other.returncode != 0 and "expert.json" in other.stderr  # planned by beam_ilqr
+
+
+def test_refined_paths_form_an_expert_directory_a_student_reads(tmp_path) -> None:
+    """``benchmarks/expert_refine.py --write`` turns a beam directory into the one
+    ``beam_ilqr`` writes: same clips, the refined paths, and it resumes clip by clip."""
+    from helpers import REPO
+
+    clip = write_bvh(idle_clip(1.0), tmp_path / "idle.bvh")
+    beam = tmp_path / "beam"
+    small = ["--planner=samples=16", "--planner=beam=2", "--planner=keep=2"]
+    assert _cli("expert", str(clip), "--out", str(beam), "--seconds", "0.3", *small,
+                cwd=tmp_path).returncode == 0  # fmt: skip
+    refined = tmp_path / "refined"
+    cmd = [sys.executable, str(REPO / "benchmarks" / "expert_refine.py"), str(beam), "--write",
+           str(refined), "--set", "iterations=1", "--set", "chunk=6"]  # fmt: skip
+    done = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    header = json.loads((refined / "expert.json").read_text())
+    assert header["method"] == "beam_ilqr" and header["planner"]["ilqr"]["iterations"] == 1
+    assert (refined / "motions" / "idle.bvh").exists()
+    report = json.loads((refined / "report.json").read_text())
+    assert report["summary"]["clips"] == 1
+    with np.load(refined / "clips" / "idle.npz") as z:
+        assert "demo_actions" in z.files and z["actions"].shape[0] == 11  # 0.3 s at 36 Hz
+    again = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0 and "idle:" not in again.stdout  # nothing planned again
+    train = _cli("train", "--sensors", "three_point", "--expert", str(refined), "--steps", "256",
+                 "--num-envs", "4", "--threads", "1", "--runs-dir", str(tmp_path / "runs"),
+                 cwd=tmp_path)  # fmt: skip
+    assert train.returncode == 0, train.stderr + train.stdout
