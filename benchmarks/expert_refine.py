@@ -59,11 +59,11 @@ def target_dir(root: Path, write: Path, overrides: dict) -> str:
 
 def refine_dir(root: Path, overrides: dict, max_clips: int | None,
                write: Path | None = None) -> list[dict]:
+    from retarget import Track
     from retarget.env.build import env_from_recipe
     from retarget.expert.ilqr import IlqrConfig, IlqrRefiner
     from retarget.expert.store import done_clips, load_track, read_header, write_report
     from retarget.expert.store import write_track as store_track
-    from retarget.expert.track import Track
     from retarget.recipe import load
     from retarget.registry.loader import load_plugins
 

@@ -178,7 +178,7 @@ class GoodPlanner(retarget.Planner):
         return stepped
 
     def track(self, env, clip, *, seconds=None, threads=1, progress=None):
-        from retarget.expert.track import Track
+        from retarget import Track
 
         sim, lay, ref = env.sim, env.layout, env.reference
         fps = 1.0 / sim.settings.control_dt

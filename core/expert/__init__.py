@@ -12,6 +12,6 @@ archives, in parallel and resumably.
 
 from retarget.expert.beam import BeamTracker
 from retarget.expert.config import ExpertConfig
-from retarget.expert.track import Track
+from retarget.kinds.track import Track
 
 __all__ = ["BeamTracker", "ExpertConfig", "Track"]

@@ -28,7 +28,7 @@ import torch
 
 from retarget.errors import PluginError
 from retarget.expert.config import CostWeights, ExpertConfig
-from retarget.expert.track import Track
+from retarget.kinds.track import Track
 from retarget.sim.actuation import describe_actuation
 from retarget.sim.backend import make_sim
 from retarget.sim.inverse_dynamics import reference_torques

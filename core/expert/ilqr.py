@@ -33,8 +33,8 @@ import numpy as np
 import torch
 from pydantic import Field
 
-from retarget.expert.track import Track
 from retarget.kinds.base import PluginConfig
+from retarget.kinds.track import Track
 from retarget.sim.backend import make_sim
 from retarget.sim.tangent import Tangent
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from retarget.errors import RecipeError
 from retarget.expert.config import ADDED_LATER
-from retarget.expert.track import Track
+from retarget.kinds.track import Track
 
 VERSION = 1
 HEADER = "expert.json"

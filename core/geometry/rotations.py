@@ -66,6 +66,26 @@ def from_axis_angle(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return np.concatenate([np.cos(half), np.sin(half) * axis], axis=-1)
 
 
+def from_rotation_vector(rotvec: np.ndarray) -> np.ndarray:
+    """Unit quaternions of rotation vectors ``(..., 3)`` (axis times angle), exact near zero."""
+    rotvec = np.asarray(rotvec, dtype=np.float64)
+    angle = np.linalg.norm(rotvec, axis=-1, keepdims=True)
+    half = 0.5 * angle
+    # sin(half) / angle, with its limit 1/2 at zero
+    scale = np.where(angle > 1e-12, np.sin(half) / np.maximum(angle, 1e-12), 0.5)
+    return np.concatenate((np.cos(half), rotvec * scale), axis=-1)
+
+
+def to_rotation_vector(q: np.ndarray) -> np.ndarray:
+    """Rotation vectors ``(..., 3)`` of unit quaternions, the shorter way round."""
+    q = np.asarray(q, dtype=np.float64)
+    q = np.where(q[..., :1] < 0, -q, q)
+    v = q[..., 1:]
+    s = np.linalg.norm(v, axis=-1, keepdims=True)
+    angle = 2.0 * np.arctan2(s, q[..., :1])
+    return v * np.where(s > 1e-12, angle / np.maximum(s, 1e-12), 2.0)
+
+
 def from_euler(angles: np.ndarray, order: str, *, degrees: bool = True) -> np.ndarray:
     """Quaternion of intrinsic rotations about the axes in ``order`` (e.g. ``"zyx"``).
 

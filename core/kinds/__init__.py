@@ -15,6 +15,7 @@ from retarget.kinds.scene import Scene
 from retarget.kinds.sensor import Observer, ObsSpec, RecordedStream, Sensor
 from retarget.kinds.step import StepNeeds, StepPlugin
 from retarget.kinds.termination import Termination
+from retarget.kinds.track import Track
 from retarget.kinds.tracking_env import TrackingEnv
 
 KINDS: dict[str, type[Plugin]] = {
@@ -56,6 +57,7 @@ __all__ = [
     "StepNeeds",
     "StepPlugin",
     "Termination",
+    "Track",
     "TrackingEnv",
     "VecEnv",
     "gaussian_kernel",

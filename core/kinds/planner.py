@@ -1,7 +1,7 @@
 """Planners: tracking experts that need no training (``retarget expert --method NAME``).
 
 A planner tracks one clip of an environment's motion library offline, using the simulator
-itself, and returns the path it found (:class:`retarget.expert.Track`): the states, the
+itself, and returns the path it found (:class:`retarget.Track`): the states, the
 actions in the env's own action space that produce them from the clip's first frame, and
 PHC's figures. ``retarget expert`` runs a planner over clips, in parallel and resumably,
 and writes what it returns; students learn from those states and actions by supervised
@@ -12,12 +12,10 @@ from __future__ import annotations
 
 from abc import abstractmethod
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import Any, ClassVar
 
 from retarget.kinds.base import ConfigT, Plugin
-
-if TYPE_CHECKING:
-    from retarget.expert.track import Track
+from retarget.kinds.track import Track
 
 
 class Planner(Plugin[ConfigT]):

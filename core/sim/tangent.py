@@ -13,38 +13,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-
-def _quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    aw, ax, ay, az = np.moveaxis(a, -1, 0)
-    bw, bx, by, bz = np.moveaxis(b, -1, 0)
-    return np.stack(
-        (
-            aw * bw - ax * bx - ay * by - az * bz,
-            aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-        ),
-        axis=-1,
-    )
-
-
-def _quat_exp(rotvec: np.ndarray) -> np.ndarray:
-    """Unit quaternions of rotation vectors ``(..., 3)``."""
-    angle = np.linalg.norm(rotvec, axis=-1, keepdims=True)
-    half = 0.5 * angle
-    # sin(half)/angle, with its limit 1/2 near zero
-    scale = np.where(angle > 1e-12, np.sin(half) / np.maximum(angle, 1e-12), 0.5)
-    return np.concatenate((np.cos(half), rotvec * scale), axis=-1)
-
-
-def _quat_log(q: np.ndarray) -> np.ndarray:
-    """Rotation vectors of unit quaternions ``(..., 4)`` (the shorter way round)."""
-    q = np.where(q[..., :1] < 0, -q, q)
-    v = q[..., 1:]
-    s = np.linalg.norm(v, axis=-1, keepdims=True)
-    angle = 2.0 * np.arctan2(s, q[..., :1])
-    scale = np.where(s > 1e-12, angle / np.maximum(s, 1e-12), 2.0)
-    return v * scale
+from retarget.geometry import rotations
 
 
 class Tangent:
@@ -75,7 +44,8 @@ class Tangent:
         for q, v in self._free:
             out[:, q : q + 3] += dq[:, v : v + 3]
         for q, v in self._rotations():
-            quat = _quat_mul(out[:, q : q + 4], _quat_exp(dq[:, v : v + 3]))
+            turn = rotations.from_rotation_vector(dq[:, v : v + 3])
+            quat = rotations.mul(out[:, q : q + 4], turn)
             out[:, q : q + 4] = quat / np.linalg.norm(quat, axis=-1, keepdims=True)
         return out
 
@@ -89,6 +59,6 @@ class Tangent:
         for q, v in self._free:
             out[:, v : v + 3] = qpos[:, q : q + 3] - base[:, q : q + 3]
         for q, v in self._rotations():
-            inv = base[:, q : q + 4] * np.array([1.0, -1.0, -1.0, -1.0])
-            out[:, v : v + 3] = _quat_log(_quat_mul(inv, qpos[:, q : q + 4]))
+            step = rotations.mul(rotations.conj(base[:, q : q + 4]), qpos[:, q : q + 4])
+            out[:, v : v + 3] = rotations.to_rotation_vector(step)
         return out

@@ -604,7 +604,7 @@ def check_planner_tracks(plugin: object) -> None:
     """A quarter second of a generated walk: the path has one action per step, finite states
     of the whole model, actions in [-1, 1], the reference's bodies beside its own, and the
     actions stepped in the env from the placed first frame reproduce its states."""
-    from retarget.expert.track import Track
+    from retarget import Track
 
     env, track = _planned(plugin)
     assert isinstance(track, Track), f"track() returned {type(track).__name__}, not a Track"

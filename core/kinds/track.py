@@ -1,6 +1,6 @@
 """What a planner found for one clip: the path, its actions and PHC's figures of it.
 
-Every planner (:class:`retarget.kinds.Planner`) returns one; :mod:`retarget.expert.store`
+Every planner (:class:`retarget.Planner`) returns one; :mod:`retarget.expert.store`
 writes it, and students learn from the states and actions in it.
 """
 
