@@ -42,6 +42,11 @@ MAX_DAMPING = 1e6
 """Damping past which a round's step is too small to matter: the refinement stops."""
 
 
+def _worst_frame(body: np.ndarray, ref_body: np.ndarray) -> float:
+    """The largest per-frame mean distance (m) of the bodies from the reference's."""
+    return float(np.linalg.norm(body - ref_body, axis=-1).mean(-1).max())
+
+
 class IlqrWeights(PluginConfig):
     """Weights of the squared tracking cost every reached frame pays (Gauss-Newton)."""
 
@@ -76,6 +81,9 @@ class IlqrConfig(PluginConfig):
                         "path's state at its start, its first `commit` steps kept, the rest "
                         "of the path re-rolled from there (a shorter linear model holds better)")
     commit: int = Field(6, ge=1, le=720, description="steps kept from each window")
+    threshold: float = Field(0.5, gt=0, le=10, description="PHC's failure distance (mean "
+                             "body error, m): a refined path that exceeds it at any frame "
+                             "where the given path did not is dropped for the given one")
     chunk: int = Field(4, ge=1, le=64, description="control steps linearised per batch "
                        "(memory: chunk x (1 + 2 nv + nu) simulations)")
     weights: IlqrWeights = Field(default_factory=IlqrWeights)
@@ -349,6 +357,10 @@ class IlqrRefiner:
             _, total = self._replay(placed, path["acts"], rows, start_actions)
             if not total < cost:  # the windows' splices may lose what each window won
                 path = given
+        ref_body = track.ref_body_pos.astype(np.float64)
+        if _worst_frame(given["body"], ref_body) <= c.threshold < _worst_frame(path["body"],
+                                                                                ref_body):
+            path = given  # a lower cost that loses the clip (one frame too far) is no gain
         return replace(
             track,
             actions=path["acts"].astype(np.float32),

@@ -133,3 +133,18 @@ def test_refined_paths_form_an_expert_directory_a_student_reads(tmp_path) -> Non
                  "--num-envs", "4", "--threads", "1", "--runs-dir", str(tmp_path / "runs"),
                  cwd=tmp_path)  # fmt: skip
     assert train.returncode == 0, train.stderr + train.stdout
+
+
+def test_a_refinement_that_loses_the_clip_is_dropped(planned) -> None:
+    """Success comes before cost: a refined path with any frame past PHC's 0.5 m (here a
+    stand-in whose bodies are a metre off) is dropped for the path that tracked the clip."""
+    env, path, _, _ = planned
+
+    class Drifting(IlqrRefiner):
+        def _optimise(self, path, cost, rows, start_actions, progress):
+            moved = {**path, "body": path["body"] + 1.0, "acts": path["acts"] * 0.9}
+            return moved, 0.0
+
+    out = Drifting(env, IlqrConfig(iterations=1, chunk=6, window=0), threads=1).refine(0, path)
+    assert path.metrics()["success_clip"]
+    assert np.array_equal(out.actions, path.actions) and out.metrics()["success_clip"]
