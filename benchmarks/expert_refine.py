@@ -42,7 +42,7 @@ def target_dir(root: Path, write: Path, overrides: dict) -> str:
     """Start ``write`` as ``beam_ilqr``'s directory for ``root``'s clips; its settings key."""
     import shutil
 
-    from retarget.expert.ilqr import IlqrConfig
+    from retarget.expert.config import IlqrConfig
     from retarget.expert.store import read_header, settings_key, write_header
 
     header = read_header(root)
@@ -61,7 +61,8 @@ def refine_dir(root: Path, overrides: dict, max_clips: int | None,
                write: Path | None = None) -> list[dict]:
     from retarget import Track
     from retarget.env.build import env_from_recipe
-    from retarget.expert.ilqr import IlqrConfig, IlqrRefiner
+    from retarget.expert.config import IlqrConfig
+    from retarget.expert.ilqr import IlqrRefiner
     from retarget.expert.store import done_clips, load_track, read_header, write_report
     from retarget.expert.store import write_track as store_track
     from retarget.recipe import load

@@ -10,8 +10,25 @@ alternative segments and a report) so that policies learn from it by supervised 
 archives, in parallel and resumably.
 """
 
-from retarget.expert.beam import BeamTracker
-from retarget.expert.config import ExpertConfig
-from retarget.kinds.track import Track
+from typing import TYPE_CHECKING
 
-__all__ = ["BeamTracker", "ExpertConfig", "Track"]
+from retarget.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from retarget.expert.beam import BeamTracker
+    from retarget.expert.config import ExpertConfig, IlqrConfig
+    from retarget.expert.ilqr import IlqrRefiner
+    from retarget.kinds.track import Track
+
+__getattr__ = lazy_exports(
+    __name__,
+    {
+        "BeamTracker": "retarget.expert.beam",
+        "ExpertConfig": "retarget.expert.config",
+        "IlqrConfig": "retarget.expert.config",
+        "IlqrRefiner": "retarget.expert.ilqr",
+        "Track": "retarget.kinds.track",
+    },
+)
+
+__all__ = ["BeamTracker", "ExpertConfig", "IlqrConfig", "IlqrRefiner", "Track"]

@@ -31,9 +31,8 @@ from dataclasses import replace
 
 import numpy as np
 import torch
-from pydantic import Field
 
-from retarget.kinds.base import PluginConfig
+from retarget.expert.config import IlqrConfig
 from retarget.kinds.track import Track
 from retarget.sim.backend import make_sim
 from retarget.sim.tangent import Tangent
@@ -45,48 +44,6 @@ MAX_DAMPING = 1e6
 def _worst_frame(body: np.ndarray, ref_body: np.ndarray) -> float:
     """The largest per-frame mean distance (m) of the bodies from the reference's."""
     return float(np.linalg.norm(body - ref_body, axis=-1).mean(-1).max())
-
-
-class IlqrWeights(PluginConfig):
-    """Weights of the squared tracking cost every reached frame pays (Gauss-Newton)."""
-
-    body: float = Field(100.0, ge=0, description="mean squared world distance of the bodies (m^2)")
-    pose: float = Field(100.0, ge=0, description="mean squared root-relative distance of the "
-                        "bodies (m^2): the pose, which MPJPE measures")
-    joints: float = Field(1.0, ge=0, description="mean squared joint-angle error (rad^2)")
-    velocity: float = Field(0.01, ge=0, description="mean squared qvel error")
-    effort: float = Field(0.1, ge=0, description="mean squared change from the starting "
-                          "path's actions (action units): keeps the refinement local")
-
-
-class IlqrConfig(PluginConfig):
-    """Settings of the refinement (``retarget expert --method beam_ilqr --planner ilqr.X=``)."""
-
-    iterations: int = Field(4, ge=0, le=200, description="backward / forward rounds per window "
-                            "(per path without windows); a round after a kept one linearises "
-                            "the new path first (most of the cost)")
-    eps: float = Field(1e-6, gt=0, le=1e-2, description="finite-difference step")
-    regularization: float = Field(100.0, gt=0, le=1e6, description="first damping added to "
-                                  "the action Hessian; x10 after a failed round, /3 after a "
-                                  "kept one")
-    alphas: tuple[float, ...] = Field((1.0, 0.5, 0.25, 0.1, 0.03), min_length=1, max_length=16,
-                                      description="line-search step sizes, rolled out together")
-    feedback: tuple[float, ...] = Field((1.0, 0.0), min_length=1, max_length=4,
-                                        description="shares of the feedback gains the line "
-                                        "search tries with every step size (0: the step "
-                                        "open loop, which holds where the gains of a poor "
-                                        "linear model would push the rollout away)")
-    window: int = Field(18, ge=0, le=720, description="control steps optimised together; "
-                        "0: the whole path at once. A window is optimised from the refined "
-                        "path's state at its start, its first `commit` steps kept, the rest "
-                        "of the path re-rolled from there (a shorter linear model holds better)")
-    commit: int = Field(6, ge=1, le=720, description="steps kept from each window")
-    threshold: float = Field(0.5, gt=0, le=10, description="PHC's failure distance (mean "
-                             "body error, m): a refined path that exceeds it at any frame "
-                             "where the given path did not is dropped for the given one")
-    chunk: int = Field(4, ge=1, le=64, description="control steps linearised per batch "
-                       "(memory: chunk x (1 + 2 nv + nu) simulations)")
-    weights: IlqrWeights = Field(default_factory=IlqrWeights)
 
 
 class IlqrRefiner:

@@ -7,8 +7,10 @@ writes it, and students learn from the states and actions in it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:  # numpy is imported where a track is used: the CLI starts without it
+    import numpy as np
 
 
 @dataclass
@@ -42,6 +44,8 @@ class Track:
     def metrics(self, threshold: float = 0.5) -> dict[str, float | bool | None]:
         """PHC's figures of the best path: success (no frame with a mean body error above
         ``threshold`` m), root-relative MPJPE and G-MPJPE (mm), CPU-s per motion-second."""
+        import numpy as np
+
         err = np.linalg.norm(self.body_pos - self.ref_body_pos, axis=-1)  # (T, B)
         rel = np.linalg.norm(
             (self.body_pos - self.body_pos[:, :1]) - (self.ref_body_pos - self.ref_body_pos[:, :1]),

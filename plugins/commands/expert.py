@@ -53,8 +53,11 @@ def plan_clip(job: dict[str, Any]) -> dict[str, Any]:
     resolved = load(job["recipe"], registry, shorthands={**job["shorthands"],
                     "motions": job["path"]}, assignments=job["assignments"])  # fmt: skip
     env = env_from_recipe(resolved, registry=registry, num_envs=1, threads=job["threads"])
+    from retarget import Planner
+
     cls = registry.get("planner", job["method"]).cls
     planner = cls(cls.Config.model_validate(job["planner"]))
+    assert isinstance(planner, Planner), f"{job['method']} is registered as a planner"
     track = planner.track(env, 0, seconds=job["seconds"], threads=job["threads"],
                           progress=job.get("progress"))  # fmt: skip
     out = Path(job["out"])

@@ -6,8 +6,8 @@ from collections.abc import Callable
 from typing import Any
 
 import retarget
-from retarget import Planner
-from retarget.expert import BeamTracker, ExpertConfig, Track
+from retarget import Planner, Track
+from retarget.expert.config import ExpertConfig
 
 
 class BeamPlanner(Planner[ExpertConfig]):
@@ -31,6 +31,8 @@ class BeamPlanner(Planner[ExpertConfig]):
         threads: int = 1,
         progress: Callable[[int], None] | None = None,
     ) -> Track:
+        from retarget.expert.beam import BeamTracker
+
         return BeamTracker(env, self.config, threads=threads).track(clip, seconds, progress)
 
 

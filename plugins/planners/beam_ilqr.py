@@ -8,9 +8,8 @@ from typing import Any
 from pydantic import Field
 
 import retarget
-from retarget import Planner, PluginConfig
-from retarget.expert import BeamTracker, ExpertConfig, Track
-from retarget.expert.ilqr import IlqrConfig, IlqrRefiner
+from retarget import Planner, PluginConfig, Track
+from retarget.expert.config import ExpertConfig, IlqrConfig
 
 
 class BeamIlqrConfig(PluginConfig):
@@ -46,6 +45,9 @@ class BeamIlqrPlanner(Planner[BeamIlqrConfig]):
         threads: int = 1,
         progress: Callable[[int], None] | None = None,
     ) -> Track:
+        from retarget.expert.beam import BeamTracker
+        from retarget.expert.ilqr import IlqrRefiner
+
         path = BeamTracker(env, self.config.beam, threads=threads).track(clip, seconds, progress)
         return IlqrRefiner(env, self.config.ilqr, threads=threads).refine(clip, path, progress)
 

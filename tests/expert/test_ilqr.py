@@ -12,7 +12,8 @@ import pytest
 
 from retarget.env.build import env_from_recipe
 from retarget.expert import BeamTracker, ExpertConfig
-from retarget.expert.ilqr import IlqrConfig, IlqrRefiner
+from retarget.expert.config import IlqrConfig
+from retarget.expert.ilqr import IlqrRefiner
 from retarget.expert.store import settings_key
 from retarget.motion.bvh_write import write_bvh
 from retarget.motion.procedural import idle_clip
