@@ -26,16 +26,15 @@ from pathlib import Path
 
 import numpy as np
 import yaml
-
-KINDS = {"_walk-turn": "turn", "_walk_": "walk", "_run_": "run"}
-"""Name parts of the corpus's motions -> kind (as ``heldout_eval.py`` groups them)."""
+from heldout_eval import KINDS
 
 
 def kind_of(name: str) -> str:
-    for part, kind in KINDS.items():
-        if part in name:
+    """The kind (``heldout_eval.KINDS``) of a corpus clip named ``name``."""
+    for kind, motions in KINDS.items():
+        if any(f"_{motion}_" in name for motion in motions):
             return kind
-    return "gesture"
+    return "other"
 
 
 def target_dir(root: Path, write: Path, overrides: dict) -> str:
@@ -127,7 +126,7 @@ def summarise(rows: list[dict]) -> dict[str, dict]:
     summary = {}
     for row in rows:
         row["kind"] = kind_of(row["clip"])
-    for kind in ("walk", "turn", "run", "gesture"):
+    for kind in (*KINDS, "other"):
         mine = [r for r in rows if r["kind"] == kind]
         if not mine:
             continue
