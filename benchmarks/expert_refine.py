@@ -22,6 +22,7 @@ import json
 import sys
 import tempfile
 import time
+from fnmatch import fnmatch
 from pathlib import Path
 
 import numpy as np
@@ -57,7 +58,8 @@ def target_dir(root: Path, write: Path, overrides: dict) -> str:
 
 
 def refine_dir(root: Path, overrides: dict, max_clips: int | None,
-               write: Path | None = None) -> list[dict]:
+               write: Path | None = None, shard: tuple[int, int] = (0, 1),
+               include: str = "*") -> list[dict]:
     from retarget import Track
     from retarget.env.build import env_from_recipe
     from retarget.expert.config import IlqrConfig
@@ -76,9 +78,9 @@ def refine_dir(root: Path, overrides: dict, max_clips: int | None,
     with tempfile.TemporaryDirectory() as tmp:
         recipe_file = Path(tmp) / "recipe.yaml"
         recipe_file.write_text(yaml.safe_dump(header["recipe"]))
-        for name in list(report)[:max_clips]:
+        for i, name in enumerate(list(report)[:max_clips]):
             before = report[name]
-            if name in written:
+            if name in written or i % shard[1] != shard[0] or not fnmatch(name, include):
                 continue
             motion = next((root / "motions").glob(f"{name}.*"))
             recipe = load(recipe_file, registry, shorthands={"motions": str(motion)},
@@ -118,6 +120,8 @@ def refine_dir(root: Path, overrides: dict, max_clips: int | None,
                   f"success {before['success_clip']} -> {after['success_clip']}, "
                   f"+{r['refine_cpu_s_per_motion_s']:.1f} CPU-s per motion-s "
                   f"({r['rounds_kept']}/{r['rounds']} rounds kept)", flush=True)
+    if write:  # other shards may have written clips meanwhile: report them all
+        write_report(write, done_clips(write, key))
     return rows
 
 
@@ -157,14 +161,23 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=None, help="JSON of the figures")
     parser.add_argument("--write", type=Path, default=None,
                         help="write the refined paths as an expert directory (one source)")
+    parser.add_argument("--include", default="*", metavar="GLOB",
+                        help="only clips whose names match, e.g. '*_walk_*'")
+    parser.add_argument("--shard", default="0/1", metavar="K/N",
+                        help="refine only every N-th clip from the K-th (parallel processes "
+                        "writing one directory)")
     args = parser.parse_args()
+    k, _, n = args.shard.partition("/")
+    if not (k.isdigit() and n.isdigit() and int(k) < int(n)):
+        parser.error(f"--shard {args.shard!r}: expected K/N with 0 <= K < N")
     if args.write and len(args.dirs) != 1:
         parser.error("--write takes one source directory")
     overrides = {}
     for pair in args.sets:
         key, _, value = pair.partition("=")
         overrides[key] = yaml.safe_load(value)
-    rows = [r for d in args.dirs for r in refine_dir(d, overrides, args.max_clips, args.write)]
+    rows = [r for d in args.dirs for r in refine_dir(d, overrides, args.max_clips, args.write,
+                                                    (int(k), int(n)), args.include)]
     summary = summarise(rows)
     print(f"\n{'kind':8} {'clips':>5} {'success':>15} {'MPJPE mm':>15} {'G-MPJPE mm':>15} "
           f"{'CPU-s/motion-s':>16}")

@@ -279,6 +279,44 @@ class IlqrRefiner:
                 progress(0)
         return path, cost
 
+    def gains(self, clip: int, track: Track, damping: float = 1.0) -> np.ndarray:
+        """``(T-1, nu, 2 nv)``: per step of ``track``'s path, the feedback gains of a
+        ``window``-step LQR problem of the tracking cost around the path: ``u = u_t + K_t
+        (x - x_t)`` (``x`` the tangent-space state: position difference, then velocity) is
+        the action that brings a state near the path's back toward the reference.
+
+        They would let a student's own states be relabelled for the cost of one linearisation
+        of the path instead of planning again at each state. Their basin is what decides
+        whether that holds, and ``benchmarks/expert_basin.py`` measures it (on the corpus's
+        walks: perturbations of 1e-3 m/s die out, 1e-2 diverge as without feedback). Blocks of
+        ``commit`` steps take the gains of the window starting at their first step, as the
+        refinement commits its windows; a whole-path window (``window`` 0) takes one pass;
+        ``damping`` is added to the action Hessian (larger: gentler gains)."""
+        c = self.config
+        start = int(self.env.library.start[clip])
+        rows = start + np.arange(track.frames)
+        self.env.place(torch.tensor([clip]), torch.tensor([0]))
+        placed = {f: v[:1].copy() for f, v in self.env.sim.state_dict().items()}
+        acts = track.actions.astype(np.float64)
+        path, _ = self._replay(placed, acts, rows, acts)
+        states = {f: path[f] for f in self.grad_sim.STATE_FIELDS}
+        lin = self._linearise(states, acts, rows)
+        steps = len(acts)
+        out = np.zeros((steps, self.nu, 2 * self.nv), dtype=np.float32)
+        window, commit = (c.window, c.commit) if c.window else (steps, steps)
+        for w0 in range(0, steps, commit):
+            w1 = min(w0 + window, steps)
+            mu = damping
+            found = None
+            while found is None and mu <= MAX_DAMPING:
+                found = self._backward(tuple(x[w0:w1] for x in lin), np.zeros((w1 - w0, self.nu)),
+                                       mu)  # fmt: skip
+                mu = max(mu, 1e-6) * 10.0
+            if found is not None:
+                keep = min(commit, w1 - w0)
+                out[w0 : w0 + keep] = found[1][:keep]
+        return out
+
     def refine(
         self, clip: int, track: Track, progress: Callable[[int], None] | None = None
     ) -> Track:

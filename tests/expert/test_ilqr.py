@@ -149,3 +149,23 @@ def test_a_refinement_that_loses_the_clip_is_dropped(planned) -> None:
     out = Drifting(env, IlqrConfig(iterations=1, chunk=6, window=0), threads=1).refine(0, path)
     assert path.metrics()["success_clip"]
     assert np.array_equal(out.actions, path.actions) and out.metrics()["success_clip"]
+
+
+def test_the_path_feedback_gains_bring_a_pushed_body_back(planned) -> None:
+    """``IlqrRefiner.gains``: the LQR gains around a refined path, one block per committed
+    window. A small push of every joint velocity, replayed with them, must end nearer the path
+    than the same push replayed open loop. The push is tiny because the gains' basin is:
+    ``benchmarks/expert_basin.py`` measures it (pushes of 1e-2 already escape it)."""
+    sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
+    from expert_basin import follow
+
+    _, _, refiner, refined = planned
+    gains = refiner.gains(0, refined)
+    assert gains.shape == (len(refined.actions), refiner.nu, 2 * refiner.nv)
+    assert np.isfinite(gains).all() and np.abs(gains).max() > 0
+    still = follow(refiner, 0, refined, gains, trials=2)
+    assert still["deviation"].max() < 1e-3  # no push, no noise: the path itself
+    open_loop = follow(refiner, 0, refined, None, push=1e-4, trials=4, seed=3)
+    closed = follow(refiner, 0, refined, gains, push=1e-4, trials=4, seed=3)
+    assert closed["deviation"][:, -1].mean() < 0.8 * open_loop["deviation"][:, -1].mean(), (
+        closed["deviation"][:, -1], open_loop["deviation"][:, -1])
