@@ -11,6 +11,9 @@ ADDED_LATER: dict[str, object] = {"inverse_ff": 0.0, "inverse_support": False}
 before: a field at that value is left out of a directory's settings key, so a directory
 planned before the field existed still resumes."""
 
+ILQR_ADDED_LATER: dict[str, object] = {"relinearise": 1}
+"""The same for the refinement's fields (``beam_ilqr``'s ``ilqr`` settings)."""
+
 
 class CostWeights(BaseModel):
     """Weights of the segment-end cost, each term a distance to the reference frame."""
@@ -131,4 +134,9 @@ class IlqrConfig(PluginConfig):
                              "where the given path did not is dropped for the given one")
     chunk: int = Field(4, ge=1, le=64, description="control steps linearised per batch "
                        "(memory: chunk x (1 + 2 nv + nu) simulations)")
+    relinearise: int = Field(1, ge=1, le=100, description="linearise the path again after "
+                             "every N-th kept round; in between, a chord step: the dynamics' "
+                             "and the cost's derivatives are kept and only the residuals are "
+                             "taken from the new path's rollout (a round then costs its line "
+                             "search alone, a tenth of a linearisation)")
     weights: IlqrWeights = Field(default_factory=IlqrWeights)

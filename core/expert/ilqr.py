@@ -121,6 +121,7 @@ class IlqrRefiner:
         bad = np.zeros(A, dtype=bool)
         body = np.zeros((steps + 1, A, len(self._bodies), 3))
         body[0] = sim.raw("xpos")[:A][:, self._bodies]
+        residuals: list[np.ndarray] = []
         for t in range(steps):
             u = nominal["acts"][t] + alphas[:, None] * k[t]
             if K is not None:
@@ -134,12 +135,14 @@ class IlqrRefiner:
             ctrl[:A] = u
             bad |= sim.step(ctrl)[:A]
             r = self._residual(sim, live, np.full(A, rows[t + 1]))
+            residuals.append(r)
             cost += 0.5 * np.square(r).sum(-1) + self._effort(u - start_actions[t])
             for f in states:
                 states[f][t + 1] = sim.raw(f)[:A]
             body[t + 1] = sim.raw("xpos")[:A][:, self._bodies]
         cost[bad | ~np.isfinite(cost)] = np.inf
-        return {"cost": cost, "acts": acts, "body": body, **states}
+        res = np.stack(residuals) if residuals else np.zeros((0, A, 0))
+        return {"cost": cost, "acts": acts, "body": body, "residual": res, **states}
 
     # ------------------------------------------------------------------ derivatives
 
@@ -230,7 +233,8 @@ class IlqrRefiner:
         """``acts`` stepped from ``state`` through reference ``rows``: the path and its cost."""
         run = self._forward(state, {"acts": acts}, np.zeros_like(acts), None, np.zeros(1), rows,
                             start_actions)  # fmt: skip
-        return {f: v[:, 0] for f, v in run.items() if f != "cost"}, float(run["cost"][0])
+        path = {f: v[:, 0] for f, v in run.items() if f not in ("cost", "residual")}
+        return path, float(run["cost"][0])
 
     def _optimise(
         self,
@@ -247,6 +251,7 @@ class IlqrRefiner:
         grid = np.array([(a, f) for f in c.feedback for a in c.alphas], dtype=np.float64)
         alphas, shares = grid[:, 0], grid[:, 1]
         lin = None
+        kept = 0
         for _ in range(c.iterations):
             if not np.isfinite(cost) or mu > MAX_DAMPING:
                 break
@@ -269,10 +274,14 @@ class IlqrRefiner:
                                  "feedback": float(shares[best]), "mu": mu,
                                  "predicted": predicted})  # fmt: skip
             if new < cost:
-                path = {f: v[:, best] for f, v in trial.items() if f != "cost"}
+                path = {f: v[:, best] for f, v in trial.items() if f not in ("cost", "residual")}
                 cost = new
                 mu = max(mu / 3.0, 1e-6)
-                lin = None
+                kept += 1
+                if kept % c.relinearise:  # a chord step: the new path's residuals only
+                    lin = (*lin[:2], trial["residual"][:, best], *lin[3:])
+                else:
+                    lin = None
             else:
                 mu *= 10.0
             if progress is not None:

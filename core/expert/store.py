@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from retarget.errors import RecipeError
-from retarget.expert.config import ADDED_LATER
+from retarget.expert.config import ADDED_LATER, ILQR_ADDED_LATER
 from retarget.kinds.track import Track
 
 VERSION = 1
@@ -46,10 +46,14 @@ def clip_name(path: Path, taken: set[str]) -> str:
 
 def settings_key(header: Mapping[str, Any]) -> str:
     """Hash of what decides a clip's plan (recipe, planner and its settings); planner fields
-    of :data:`ADDED_LATER` at their old behaviour's value are left out, and so is the planner
+    of :data:`ADDED_LATER` (the refinement's: ``ILQR_ADDED_LATER``) at their old behaviour's
+    value are left out, and so is the planner
     when it is ``beam`` (directories written before planners were plugins)."""
     planner = {k: v for k, v in dict(header["planner"]).items()
                if k not in ADDED_LATER or v != ADDED_LATER[k]}  # fmt: skip
+    if isinstance(planner.get("ilqr"), dict):
+        planner["ilqr"] = {k: v for k, v in planner["ilqr"].items()
+                           if k not in ILQR_ADDED_LATER or v != ILQR_ADDED_LATER[k]}  # fmt: skip
     decides: dict[str, Any] = {"recipe": header["recipe"], "planner": planner}
     if header.get("method", "beam") != "beam":
         decides["method"] = header["method"]
