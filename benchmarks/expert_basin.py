@@ -70,8 +70,9 @@ def follow(refiner, clip: int, track, gains: np.ndarray | None, *, push: float =
     return {"deviation": deviation, "body_error": body_error}
 
 
-def load_dir(root: Path, max_clips: int | None):
-    """Yield (name, refiner, track) for the first ``max_clips`` clips of an expert directory."""
+def load_dir(root: Path, max_clips: int | None, every: int = 1):
+    """Yield (name, refiner, track) for every ``every``-th clip of an expert directory, at most
+    ``max_clips``."""
     from retarget import Track
     from retarget.env.build import env_from_recipe
     from retarget.expert.ilqr import IlqrRefiner
@@ -85,7 +86,7 @@ def load_dir(root: Path, max_clips: int | None):
     with tempfile.TemporaryDirectory() as tmp:
         recipe_file = Path(tmp) / "recipe.yaml"
         recipe_file.write_text(yaml.safe_dump(header["recipe"]))
-        for name in list(report)[:max_clips]:
+        for name in list(report)[::every][:max_clips]:
             motion = next((root / "motions").glob(f"{name}.*"))
             recipe = load(recipe_file, registry, shorthands={"motions": str(motion)},
                           assignments=["env.num_envs=1", "sim.threads=1"])  # fmt: skip
@@ -101,10 +102,10 @@ def load_dir(root: Path, max_clips: int | None):
             yield name, IlqrRefiner(env, threads=1), track
 
 
-def measure(root: Path, max_clips: int | None, pushes: list[float], noises: list[float],
-            trials: int, damping: float) -> list[dict]:
+def measure(root: Path, max_clips: int | None, every: int, pushes: list[float],
+            noises: list[float], trials: int, damping: float) -> list[dict]:
     rows = []
-    for name, refiner, track in load_dir(root, max_clips):
+    for name, refiner, track in load_dir(root, max_clips, every):
         cpu0 = time.process_time()
         gains = refiner.gains(0, track, damping=damping)
         gains_cpu = time.process_time() - cpu0
@@ -145,6 +146,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("dir", type=Path, help="an expert directory (`retarget expert --out`)")
     parser.add_argument("--max-clips", type=int, default=None)
+    parser.add_argument("--every", type=int, default=1, help="every N-th clip (a spread of kinds)")
     parser.add_argument("--pushes", default="0.0001,0.001,0.01,0.03",
                         help="joint-velocity push sizes (comma-separated)")
     parser.add_argument("--noises", default="0.01,0.03,0.1",
@@ -154,7 +156,7 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=None, help="JSON of the figures")
     args = parser.parse_args()
     floats = [[float(x) for x in s.split(",") if x] for s in (args.pushes, args.noises)]
-    rows = measure(args.dir, args.max_clips, *floats, args.trials, args.damping)
+    rows = measure(args.dir, args.max_clips, args.every, *floats, args.trials, args.damping)
     summary = summarise(rows)
     print(f"\n{'perturbation':14} {'open: dev / failed / body mm':>30} "
           f"{'feedback: dev / failed / body mm':>34}")
