@@ -12,7 +12,8 @@ before: a field at that value is left out of a directory's settings key, so a di
 planned before the field existed still resumes."""
 
 ILQR_ADDED_LATER: dict[str, object] = {"relinearise": 1}
-"""The same for the refinement's fields (``beam_ilqr``'s ``ilqr`` settings)."""
+"""The same for the refinement's fields (``beam_ilqr``'s ``ilqr`` settings): a directory
+refined before chord rounds existed recorded no ``relinearise`` and refined as with 1."""
 
 
 class CostWeights(BaseModel):
@@ -110,7 +111,7 @@ class IlqrWeights(PluginConfig):
 class IlqrConfig(PluginConfig):
     """Settings of the refinement (``retarget expert --method beam_ilqr --planner ilqr.X=``)."""
 
-    iterations: int = Field(4, ge=0, le=200, description="backward / forward rounds per window "
+    iterations: int = Field(6, ge=0, le=200, description="backward / forward rounds per window "
                             "(per path without windows); a round after a kept one linearises "
                             "the new path first (most of the cost)")
     eps: float = Field(1e-6, gt=0, le=1e-2, description="finite-difference step")
@@ -134,7 +135,7 @@ class IlqrConfig(PluginConfig):
                              "where the given path did not is dropped for the given one")
     chunk: int = Field(4, ge=1, le=64, description="control steps linearised per batch "
                        "(memory: chunk x (1 + 2 nv + nu) simulations)")
-    relinearise: int = Field(1, ge=1, le=100, description="linearise the path again after "
+    relinearise: int = Field(2, ge=1, le=100, description="linearise the path again after "
                              "every N-th kept round; in between, a chord step: the dynamics' "
                              "and the cost's derivatives are kept and only the residuals are "
                              "taken from the new path's rollout (a round then costs its line "
