@@ -73,11 +73,10 @@ def follow(refiner, clip: int, track, gains: np.ndarray | None, *, push: float =
 def load_dir(root: Path, max_clips: int | None, every: int = 1):
     """Yield (name, refiner, track) for every ``every``-th clip of an expert directory, at most
     ``max_clips``."""
-    from retarget import Track
-    from retarget.env.build import env_from_recipe
+    from expert_refine import open_clip
+
     from retarget.expert.ilqr import IlqrRefiner
-    from retarget.expert.store import load_track, read_header
-    from retarget.recipe import load
+    from retarget.expert.store import read_header
     from retarget.registry.loader import load_plugins
 
     registry = load_plugins(strict=False)
@@ -87,18 +86,7 @@ def load_dir(root: Path, max_clips: int | None, every: int = 1):
         recipe_file = Path(tmp) / "recipe.yaml"
         recipe_file.write_text(yaml.safe_dump(header["recipe"]))
         for name in list(report)[::every][:max_clips]:
-            motion = next((root / "motions").glob(f"{name}.*"))
-            recipe = load(recipe_file, registry, shorthands={"motions": str(motion)},
-                          assignments=["env.num_envs=1", "sim.threads=1"])  # fmt: skip
-            env = env_from_recipe(recipe, registry=registry, num_envs=1, threads=1)
-            sim = env.sim
-            shapes = {k: tuple(sim.raw(k).shape[1:]) for k in sim.STATE_FIELDS}
-            data = load_track(root / "clips" / f"{name}.npz", nq=shapes["qpos"][0],
-                              nv=shapes["qvel"][0], nu=env.layout.nu, state_shapes=shapes)
-            track = Track(clip=name, fps=float(data["fps"]), actions=data["actions"],
-                          qpos=data["qpos"], qvel=data["qvel"], body_pos=data["body_pos"],
-                          ref_body_pos=data["ref_body_pos"], ref_qpos0=data["ref_qpos0"],
-                          cpu_seconds=0.0)  # fmt: skip
+            env, track = open_clip(root, recipe_file, name, registry)
             yield name, IlqrRefiner(env, threads=1), track
 
 

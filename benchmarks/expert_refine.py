@@ -57,16 +57,38 @@ def target_dir(root: Path, write: Path, overrides: dict) -> str:
     return settings_key(new)
 
 
+def open_clip(root: Path, recipe_file: Path, name: str, registry, cpu_seconds: float = 0.0):
+    """One planned clip of expert directory ``root``: an env of that clip alone (the
+    directory's recipe, written to ``recipe_file``) and the clip's path as a ``Track`` (its
+    arrays checked by ``load_track``; the beam's other members as its demos)."""
+    from retarget import Track
+    from retarget.env.build import env_from_recipe
+    from retarget.expert.store import load_track
+    from retarget.recipe import load
+
+    motion = next((root / "motions").glob(f"{name}.*"))
+    recipe = load(recipe_file, registry, shorthands={"motions": str(motion)},
+                  assignments=["env.num_envs=1", "sim.threads=1"])  # fmt: skip
+    env = env_from_recipe(recipe, registry=registry, num_envs=1, threads=1)
+    sim = env.sim
+    shapes = {k: tuple(sim.raw(k).shape[1:]) for k in sim.STATE_FIELDS}
+    data = load_track(root / "clips" / f"{name}.npz", nq=shapes["qpos"][0],
+                      nv=shapes["qvel"][0], nu=env.layout.nu, state_shapes=shapes)
+    demos = {k[5:]: v for k, v in data.items() if k.startswith("demo_")}
+    track = Track(clip=name, fps=float(data["fps"]), actions=data["actions"],
+                  qpos=data["qpos"], qvel=data["qvel"], body_pos=data["body_pos"],
+                  ref_body_pos=data["ref_body_pos"], ref_qpos0=data["ref_qpos0"],
+                  cpu_seconds=cpu_seconds, demos=demos)  # fmt: skip
+    return env, track
+
+
 def refine_dir(root: Path, overrides: dict, max_clips: int | None,
                write: Path | None = None, shard: tuple[int, int] = (0, 1),
                include: str = "*") -> list[dict]:
-    from retarget import Track
-    from retarget.env.build import env_from_recipe
     from retarget.expert.config import IlqrConfig
     from retarget.expert.ilqr import IlqrRefiner
-    from retarget.expert.store import done_clips, load_track, read_header, write_report
+    from retarget.expert.store import done_clips, read_header, write_report
     from retarget.expert.store import write_track as store_track
-    from retarget.recipe import load
     from retarget.registry.loader import load_plugins
 
     registry = load_plugins(strict=False)
@@ -82,19 +104,7 @@ def refine_dir(root: Path, overrides: dict, max_clips: int | None,
             before = report[name]
             if name in written or i % shard[1] != shard[0] or not fnmatch(name, include):
                 continue
-            motion = next((root / "motions").glob(f"{name}.*"))
-            recipe = load(recipe_file, registry, shorthands={"motions": str(motion)},
-                          assignments=["env.num_envs=1", "sim.threads=1"])  # fmt: skip
-            env = env_from_recipe(recipe, registry=registry, num_envs=1, threads=1)
-            sim = env.sim
-            shapes = {k: tuple(sim.raw(k).shape[1:]) for k in sim.STATE_FIELDS}
-            data = load_track(root / "clips" / f"{name}.npz", nq=shapes["qpos"][0],
-                              nv=shapes["qvel"][0], nu=env.layout.nu, state_shapes=shapes)
-            demos = {k[5:]: v for k, v in data.items() if k.startswith("demo_")}
-            track = Track(clip=name, fps=float(data["fps"]), actions=data["actions"],
-                          qpos=data["qpos"], qvel=data["qvel"], body_pos=data["body_pos"],
-                          ref_body_pos=data["ref_body_pos"], ref_qpos0=data["ref_qpos0"],
-                          cpu_seconds=before["cpu_seconds"], demos=demos)  # fmt: skip
+            env, track = open_clip(root, recipe_file, name, registry, before["cpu_seconds"])
             refiner = IlqrRefiner(env, IlqrConfig(**overrides), threads=1)
             cpu0 = time.process_time()
             refined = refiner.refine(0, track)
