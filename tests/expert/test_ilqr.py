@@ -109,7 +109,8 @@ def test_cli_plans_with_a_planner_plugin_and_names_bad_ones(tmp_path) -> None:
 
 def test_refined_paths_form_an_expert_directory_a_student_reads(tmp_path) -> None:
     """``benchmarks/expert_refine.py --write`` turns a beam directory into the one
-    ``beam_ilqr`` writes: same clips, the refined paths, and it resumes clip by clip."""
+    ``beam_ilqr`` writes: same clips, the refined paths, and it resumes clip by clip;
+    ``--include`` and ``--shard`` pick the clips a process refines."""
     from helpers import REPO
 
     clip = write_bvh(idle_clip(1.0), tmp_path / "idle.bvh")
@@ -120,7 +121,15 @@ def test_refined_paths_form_an_expert_directory_a_student_reads(tmp_path) -> Non
     refined = tmp_path / "refined"
     cmd = [sys.executable, str(REPO / "benchmarks" / "expert_refine.py"), str(beam), "--write",
            str(refined), "--set", "iterations=1", "--set", "chunk=6"]  # fmt: skip
-    done = subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    for narrow in (["--include", "*_walk_*"], ["--shard", "1/2"]):  # the one clip left out
+        skip = subprocess.run(cmd + narrow, cwd=tmp_path, capture_output=True, text=True,
+                              timeout=600)  # fmt: skip
+        assert skip.returncode == 0 and "idle:" not in skip.stdout, skip.stderr
+        assert json.loads((refined / "report.json").read_text())["summary"]["clips"] == 0
+    bad = subprocess.run([*cmd, "--shard", "2/2"], cwd=tmp_path, capture_output=True, text=True)
+    assert bad.returncode == 2 and "--shard '2/2'" in bad.stderr
+    done = subprocess.run([*cmd, "--shard", "0/2"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=600)  # fmt: skip
     assert done.returncode == 0, done.stderr
     header = json.loads((refined / "expert.json").read_text())
     assert header["method"] == "beam_ilqr" and header["planner"]["ilqr"]["iterations"] == 1
