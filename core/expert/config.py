@@ -113,7 +113,8 @@ class IlqrConfig(PluginConfig):
 
     iterations: int = Field(6, ge=0, le=200, description="backward / forward rounds per window "
                             "(per path without windows); a round after a kept one linearises "
-                            "the new path first (most of the cost)")
+                            "the new path first (most of the cost) unless it is a chord step "
+                            "(`relinearise`)")
     eps: float = Field(1e-6, gt=0, le=1e-2, description="finite-difference step")
     regularization: float = Field(100.0, gt=0, le=1e6, description="first damping added to "
                                   "the action Hessian; x10 after a failed round, /3 after a "

@@ -8,6 +8,11 @@ a forward pass with the feedback gains that keeps the rollout near the nominal p
 moves. A step is only kept when the real simulation's cost falls, so the refined path is never
 worse than the one it started from, and it is still a rollout of the env's own physics.
 
+Between linearisations a kept round may be a chord step (``relinearise``): the derivatives
+are kept and only the new path's residuals, which the line search's rollout gives for free,
+enter the next backward pass; six rounds with every other one a chord cost what four full
+rounds did and end closer (``benchmarks/results/expert_student_2026-12-05.md``).
+
 It works in windows, as model-predictive control does: 18 control steps (half a second)
 optimised from the refined path's state at the window's start, 6 of them kept, the rest of
 the path re-rolled from there. A linear model of a whole clip does not hold: through a few
@@ -296,8 +301,9 @@ class IlqrRefiner:
 
         They would let a student's own states be relabelled for the cost of one linearisation
         of the path instead of planning again at each state. Their basin is what decides
-        whether that holds, and ``benchmarks/expert_basin.py`` measures it (on the corpus's
-        walks: perturbations of 1e-3 m/s die out, 1e-2 diverge as without feedback). Blocks of
+        whether that holds, and ``benchmarks/expert_basin.py`` measures it (on refined walks,
+        turns and runs: joint-velocity pushes of 1e-4 mostly die out with them where three in
+        four open-loop replays fall; at 1e-3 most fall either way). Blocks of
         ``commit`` steps take the gains of the window starting at their first step, as the
         refinement commits its windows; a whole-path window (``window`` 0) takes one pass;
         ``damping`` is added to the action Hessian (larger: gentler gains)."""

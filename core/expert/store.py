@@ -47,8 +47,8 @@ def clip_name(path: Path, taken: set[str]) -> str:
 def settings_key(header: Mapping[str, Any]) -> str:
     """Hash of what decides a clip's plan (recipe, planner and its settings); planner fields
     of :data:`ADDED_LATER` (the refinement's: ``ILQR_ADDED_LATER``) at their old behaviour's
-    value are left out, and so is the planner
-    when it is ``beam`` (directories written before planners were plugins)."""
+    value are left out, and so is the planner when it is ``beam`` (directories written before
+    planners were plugins)."""
     planner = {k: v for k, v in dict(header["planner"]).items()
                if k not in ADDED_LATER or v != ADDED_LATER[k]}  # fmt: skip
     if isinstance(planner.get("ilqr"), dict):
