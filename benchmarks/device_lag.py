@@ -59,8 +59,10 @@ class LagRecorder(MetricTerm):
 
 def lag_errors(batches: list[dict[str, np.ndarray]], max_lag: int) -> dict[str, list[float]]:
     """Mean distance (cm) of the head and of the hands from the reference ``k`` steps earlier,
-    for ``k = 0 .. max_lag``, over steps tracked at both times."""
-    sums = np.zeros((max_lag + 1, 2))
+    for ``k = 0 .. max_lag``, over steps tracked at both times; ``head_up_cm``: the vertical
+    part of the head's (how much of it is posture: a body lower or higher than the
+    reference's, rather than behind or beside it)."""
+    sums = np.zeros((max_lag + 1, 3))
     counts = np.zeros(max_lag + 1)
     for b in batches:
         sim, ref, ok = b["sim"], b["ref"], b["ok"].astype(bool)
@@ -70,9 +72,11 @@ def lag_errors(batches: list[dict[str, np.ndarray]], max_lag: int) -> dict[str, 
             d = np.linalg.norm(now - then, axis=-1)  # (T-k, runs, 3)
             sums[k, 0] += d[..., 0][both].sum()
             sums[k, 1] += d[..., 1:].mean(-1)[both].sum()
+            sums[k, 2] += np.abs(now[..., 0, 2] - then[..., 0, 2])[both].sum()
             counts[k] += both.sum()
     mean = sums / np.maximum(counts, 1)[:, None] * 100
-    return {"head_cm": mean[:, 0].tolist(), "hands_cm": mean[:, 1].tolist()}
+    return {"head_cm": mean[:, 0].tolist(), "hands_cm": mean[:, 1].tolist(),
+            "head_up_cm": mean[:, 2].tolist()}  # fmt: skip
 
 
 def measure(run: str, files: list[Path], num_envs: int, max_lag: int) -> dict:
@@ -98,6 +102,7 @@ def measure(run: str, files: list[Path], num_envs: int, max_lag: int) -> dict:
         "success_frame": report["overall"].get("success_frame", float("nan")),
         "head_cm_now": float(head[0]), "head_cm_best": float(head.min()),
         "head_lag_steps": int(head.argmin()),
+        "head_up_cm_at_lag": float(lags["head_up_cm"][int(head.argmin())]),
         "hands_cm_now": float(hands[0]), "hands_cm_best": float(hands.min()),
         "hands_lag_steps": int(hands.argmin()),
         "by_lag": lags,
@@ -124,7 +129,8 @@ def main() -> int:
             r = measure(run, files, args.num_envs, args.max_lag)
             results[run][kind] = r
             print(f"{run} {kind} ({r['clips']} clips): head {r['head_cm_now']:.1f} cm, "
-                  f"{r['head_cm_best']:.1f} cm at a lag of {r['head_lag_steps']} steps; hands "
+                  f"{r['head_cm_best']:.1f} cm at a lag of {r['head_lag_steps']} steps (vertical "
+                  f"{r['head_up_cm_at_lag']:.1f}); hands "
                   f"{r['hands_cm_now']:.1f} cm, {r['hands_cm_best']:.1f} cm at "
                   f"{r['hands_lag_steps']}", flush=True)
     if args.out:

@@ -27,6 +27,7 @@ def test_a_delayed_copy_is_found_at_its_delay() -> None:
     assert int(head.argmin()) == 3 and head[3] < 1e-9
     assert 25 < head[0] < 30  # 0.3 m behind, but the first 3 steps stand still
     assert np.array(lags["hands_cm"]).argmin() == 3
+    assert max(lags["head_up_cm"]) == 0.0  # it moved along x only
 
 
 def test_steps_not_tracked_are_left_out() -> None:
