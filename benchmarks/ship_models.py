@@ -75,18 +75,24 @@ def main() -> int:
     parser.add_argument("--plus-run", action="append", default=[], metavar="RUN",
                         help="a run between that shipped model and this one in a chain of "
                         "--init-from starts: its samples and CPU-hours are added too")
+    parser.add_argument("--plus-steps", type=float, default=0.0, metavar="N",
+                        help="samples of earlier links of the chain whose runs are no longer "
+                        "on disk (say which in --notes)")
+    parser.add_argument("--plus-hours", type=float, default=0.0, metavar="H",
+                        help="their CPU-hours")
     parser.add_argument("--no-state", action="store_true", help="package only: leave "
                         "benchmarks/pretrain/NAME as it is (a snapshot of a run still training)")
     args = parser.parse_args()
     run = resolve_run(args.run)
     lock = yaml.safe_load((run / LOCK).read_text())
     row = last_row(run)
-    before_steps, before_hours = 0, 0.0
+    before_steps, before_hours = int(args.plus_steps), float(args.plus_hours)
     if args.plus_card:  # read before packaging: shipping NAME may replace that very card
         from retarget.pretrained import card as card_of
 
         before = card_of(args.plus_card)
-        before_steps, before_hours = before.env_steps, before.cpu_hours
+        before_steps += before.env_steps
+        before_hours += before.cpu_hours
     for between in args.plus_run:
         last = last_row(resolve_run(between))
         before_steps += int(float(last["step"]))
