@@ -79,7 +79,8 @@ def lag_errors(batches: list[dict[str, np.ndarray]], max_lag: int) -> dict[str, 
             "head_up_cm": mean[:, 2].tolist()}  # fmt: skip
 
 
-def measure(run: str, files: list[Path], num_envs: int, max_lag: int) -> dict:
+def measure(run: str, files: list[Path], num_envs: int, max_lag: int,
+            sets: list[str] = ()) -> dict:  # fmt: skip
     from retarget.eval import EvalSettings, evaluate
     from retarget.kinds.capabilities import Acting
     from retarget.registry.loader import load_plugins
@@ -88,7 +89,8 @@ def measure(run: str, files: list[Path], num_envs: int, max_lag: int) -> dict:
     folder = Path(tempfile.mkdtemp(prefix="lag-"))
     for f in files:
         (folder / f.name).symlink_to(f)
-    loaded = load_run(run, load_plugins(strict=False), num_envs=num_envs, motions=str(folder))
+    loaded = load_run(run, load_plugins(strict=False), num_envs=num_envs, motions=str(folder),
+                      assignments=list(sets))  # fmt: skip
     if not isinstance(loaded.algorithm, Acting):
         raise SystemExit(f"{run}: not a policy that acts")
     layout = loaded.env.layout
@@ -117,6 +119,8 @@ def main() -> int:
     parser.add_argument("--max-clips", type=int, default=8, help="per kind")
     parser.add_argument("--num-envs", type=int, default=32)
     parser.add_argument("--max-lag", type=int, default=12, help="control steps")
+    parser.add_argument("--set", dest="sets", action="append", default=[], metavar="PATH=VALUE",
+                        help="change a field of the run's recipe, e.g. sensors.1.offset=2")
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
     results: dict[str, dict] = {}
@@ -126,7 +130,7 @@ def main() -> int:
             if kind not in KINDS:
                 parser.error(f"--kinds: {kind!r} is not one of {', '.join(KINDS)}")
             files = corpus_files(args.style, kind, args.max_clips)
-            r = measure(run, files, args.num_envs, args.max_lag)
+            r = measure(run, files, args.num_envs, args.max_lag, args.sets)
             results[run][kind] = r
             print(f"{run} {kind} ({r['clips']} clips): head {r['head_cm_now']:.1f} cm, "
                   f"{r['head_cm_best']:.1f} cm at a lag of {r['head_lag_steps']} steps (vertical "
