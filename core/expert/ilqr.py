@@ -293,6 +293,18 @@ class IlqrRefiner:
                 progress(0)
         return path, cost
 
+    def _given(self, clip: int, track: Track
+               ) -> tuple[np.ndarray, dict, np.ndarray, dict, float]:  # fmt: skip
+        """``track``'s actions stepped from clip ``clip``'s placed first frame: the reference
+        rows, the placed state, the actions as given (float64), the path (every state, body
+        positions and the actions as applied) and its cost."""
+        rows = int(self.env.library.start[clip]) + np.arange(track.frames)
+        self.env.place(torch.tensor([clip]), torch.tensor([0]))
+        placed = {f: v[:1].copy() for f, v in self.env.sim.state_dict().items()}
+        acts = track.actions.astype(np.float64)
+        path, cost = self._replay(placed, acts, rows, acts)
+        return rows, placed, acts, path, cost
+
     def gains(self, clip: int, track: Track, damping: float = 1.0) -> np.ndarray:
         """``(T-1, nu, 2 nv)``: per step of ``track``'s path, the feedback gains of a
         ``window``-step LQR problem of the tracking cost around the path: ``u = u_t + K_t
@@ -308,12 +320,7 @@ class IlqrRefiner:
         refinement commits its windows; a whole-path window (``window`` 0) takes one pass;
         ``damping`` is added to the action Hessian (larger: gentler gains)."""
         c = self.config
-        start = int(self.env.library.start[clip])
-        rows = start + np.arange(track.frames)
-        self.env.place(torch.tensor([clip]), torch.tensor([0]))
-        placed = {f: v[:1].copy() for f, v in self.env.sim.state_dict().items()}
-        acts = track.actions.astype(np.float64)
-        path, _ = self._replay(placed, acts, rows, acts)
+        rows, _, acts, path, _ = self._given(clip, track)
         states = {f: path[f] for f in self.grad_sim.STATE_FIELDS}
         lin = self._linearise(states, acts, rows)
         steps = len(acts)
@@ -337,14 +344,9 @@ class IlqrRefiner:
     ) -> Track:
         """``track`` (a path of clip ``clip`` from its first frame) with lower tracking cost;
         the same path when no round lowers it."""
-        c, env = self.config, self.env
+        c = self.config
         cpu0 = time.process_time()
-        start = int(env.library.start[clip])
-        rows = start + np.arange(track.frames)
-        env.place(torch.tensor([clip]), torch.tensor([0]))
-        placed = {f: v[:1].copy() for f, v in env.sim.state_dict().items()}
-        start_actions = track.actions.astype(np.float64)
-        given, cost = self._replay(placed, start_actions, rows, start_actions)
+        rows, placed, start_actions, given, cost = self._given(clip, track)
         self.history = []
         if not c.window:
             path, _ = self._optimise(given, cost, rows, start_actions, progress)
