@@ -11,7 +11,6 @@ from retarget.commands.numbers import amount, count, image_size
 from retarget.errors import RetargetError, require_extra
 from retarget.kinds.capabilities import Acting, Exportable, require
 from retarget.registry import Registry
-from retarget.train.run_dir import resolve_run
 
 if TYPE_CHECKING:
     from retarget.motion.device_recording import DeviceRecording
@@ -76,36 +75,18 @@ def _driven_by(rec: DeviceRecording, path: str, registry: Registry, args: argpar
     import numpy as np
     import torch
 
-    from retarget.motion.device_stream import align_to, resample_stream
-    from retarget.motion.procedural import idle_clip
-    from retarget.train.load import load_run, locked_recipe
+    from retarget.eval.recorded import drive_recordings
 
-    changes = _changes(args)
-    resolved = locked_recipe(resolve_run(path), registry, **changes)[0]
-    hz = resolved.recipe.sim.control_hz
-    stream = resample_stream(rec, hz)
-    # the sensors' history before the first sample is the standing body, as in a live
-    # session (retarget serve), which starts at the same frame of the same idle clip
-    pasts = [c.instantiate().frames_needed()[0] for c in resolved.of_kind("sensor")]
-    lead = max([1, *pasts])
-    seconds = (lead + len(stream)) / hz + 1.0
-    loaded = load_run(path, registry, num_envs=1, clips=[idle_clip(seconds)], **changes)
-    lib = loaded.env.library
-    first = int(lib.start[0]) + lead
-    rows = first + torch.arange(len(stream))
-    start_hmd = lib.devices[first, 0].double().numpy()
-    scale = loaded.env.options.devices == "character"
     try:
-        aligned = align_to(stream, start_hmd, scale=scale)
+        drive = drive_recordings(path, registry, [rec], changes=_changes(args))
     except ValueError as exc:
         raise RetargetError(f"{args.input}: {exc}") from None
-    lib.devices[rows] = torch.as_tensor(aligned, dtype=lib.devices.dtype)
-    last = first + len(stream) - 1
-    lib.devices[last + 1 : int(lib.start[0]) + int(lib.length[0])] = lib.devices[last]
-    args.seconds = min(args.seconds, (len(stream) - 1) / hz)
-    args.start = args.start + lead / hz  # the rollout starts at the first sample
-    _replay_recorded(loaded.env, rows, rec, rec.time[0] + np.arange(len(stream)) / hz, args.input)
-    return loaded, f"recording {Path(args.input).name}"
+    hz = drive.loaded.env.sim.settings.control_hz
+    args.seconds = min(args.seconds, (drive.lengths[0] - 1) / hz)
+    args.start = args.start + drive.lead / hz  # the rollout starts at the first sample
+    times = rec.time[0] + np.arange(drive.lengths[0]) / hz
+    _replay_recorded(drive.loaded.env, torch.as_tensor(drive.rows[0]), rec, times, args.input)
+    return drive.loaded, f"recording {Path(args.input).name}"
 
 
 def _replay_recorded(env, rows, rec: DeviceRecording, times, path: str) -> None:

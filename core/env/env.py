@@ -33,6 +33,7 @@ import torch
 
 from retarget.character.kinematic import root_height_ratio, scaled_clip
 from retarget.env.curriculum import FailureCurriculum
+from retarget.env.device_noise import DeviceNoise
 from retarget.env.managers import RewardManager, TerminationManager
 from retarget.env.observation_manager import ObservationManager, PluginSource
 from retarget.env.observations import Privileged, Proprio
@@ -139,6 +140,8 @@ class RetargetEnv:
             mass = float(self.world.model.body_subtreemass[root])
             height = 1.9 * float(np.median(self.reference.qpos64[:, 2]))
             self.root_assist = RootAssist(opts.root_assist, mass, height)
+        self.device_noise = (DeviceNoise(opts.device_noise, n, seed)
+                             if opts.device_noise is not None else None)  # fmt: skip
         self.generator = torch.Generator().manual_seed(seed)
         self.clip = torch.zeros(n, dtype=torch.long)
         self.frame = torch.zeros(n, dtype=torch.long)
@@ -230,6 +233,8 @@ class RetargetEnv:
         lib = self.library
         rows = lib.rows(self.clip, self.frame)[:, 0]
         devices = lib.devices[lib.rows(self.clip, self.frame, self.window_offsets)]
+        if self.device_noise is not None:
+            devices = self.device_noise.apply(devices)
         need = self._needs
         ahead = {}
         if need.reference_offsets:
@@ -286,6 +291,8 @@ class RetargetEnv:
             pos, quat = self.scene.mocap_poses(env_ids)
             mocap = (self._mocap_ids, pos.numpy(), quat.numpy())
         self.sim.reset(env_ids.numpy(), qpos, self.reference.qvel64[rows], mocap)
+        if self.device_noise is not None:
+            self.device_noise.redraw(env_ids)
         self.episode_step[env_ids] = 0
         self.episode_return[env_ids] = 0.0
         self.prev_action[env_ids] = 0.0
@@ -442,6 +449,7 @@ class RetargetEnv:
             "total_steps": self.total_steps,
             "curriculum": self.curriculum.state_dict() if self.curriculum is not None else {},
             "scene": self.scene.state_dict(),
+            "device_noise": {} if self.device_noise is None else self.device_noise.state_dict(),
         }
 
     def load_state_dict(self, state: Mapping) -> dict[str, torch.Tensor]:
@@ -465,6 +473,8 @@ class RetargetEnv:
             self.curriculum.load_state_dict(state["curriculum"])
         if state.get("scene"):
             self.scene.load_state_dict(state["scene"])
+        if state.get("device_noise") and self.device_noise is not None:
+            self.device_noise.load_state_dict(state["device_noise"])
         return self.observe(self._context(self.prev_action))
 
     @property

@@ -1,5 +1,5 @@
 """The tracking environment's own settings: the recipe's ``env`` section, used as is
-(with its ``curriculum`` and ``root_assist`` subsections)."""
+(with its ``curriculum``, ``root_assist`` and ``device_noise`` subsections)."""
 
 from __future__ import annotations
 
@@ -37,6 +37,20 @@ class RootAssistOptions(BaseModel):
 
     def scale_at(self, env_steps: int) -> float:
         return self.strength * max(0.0, 1.0 - env_steps / self.anneal_steps)
+
+
+class DeviceNoiseOptions(BaseModel):
+    """The recipe's ``env.device_noise`` section."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+    height: float = Field(
+        0.05, ge=0.0, le=0.5, description="half-range of an episode's vertical offset, m"
+    )
+    scale: float = Field(
+        0.03, ge=0.0, le=0.3,
+        description="half-range of an episode's height scale (about the floor)",
+    )
 
 
 class EnvOptions(BaseModel):
@@ -78,4 +92,11 @@ class EnvOptions(BaseModel):
         None,
         description="training only: a root force/torque toward the reference, annealed to "
         "zero over anneal_steps (null: none); e.g. {strength: 1, anneal_steps: 3000000}",
+    )
+    device_noise: DeviceNoiseOptions | None = Field(
+        None,
+        description="training only: each episode's headset and controllers sit higher or lower "
+        "(a vertical offset and a height scale drawn per episode), so a device-driven policy "
+        "does not depend on a calibration exact to the centimetre (null: exact devices); "
+        "e.g. {height: 0.05, scale: 0.03}",
     )

@@ -276,6 +276,8 @@ class Trainer:
                 assist = self.env.root_assist
                 if assist is not None:  # training alone gets the annealed root assist
                     assist.scale = assist.options.scale_at(self.progress.env_steps)
+                if self.env.device_noise is not None:  # and the devices' calibration noise
+                    self.env.device_noise.active = True
                 result = as_result(self.algorithm.train_iteration(self.env))
                 self._check_finite(result)
                 self.headline = result.headline
@@ -315,6 +317,8 @@ class Trainer:
                 last = self._save_uninterrupted()
             ended = self.stop_reason
         finally:
+            if self.env.device_noise is not None:  # whatever uses this env next sees no noise
+                self.env.device_noise.active = False
             self._notify("on_train_end", ended, last)
             for sig, handler in previous.items():
                 signal.signal(sig, handler)

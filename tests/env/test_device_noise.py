@@ -1,0 +1,84 @@
+"""Device calibration noise: per-episode heights of the devices, in training only."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+
+from retarget.env.build import env_from_recipe
+from retarget.env.device_noise import DeviceNoise
+from retarget.recipe import load
+from retarget.registry.loader import load_plugins
+from retarget.settings.env import DeviceNoiseOptions
+
+REGISTRY = load_plugins(strict=True)
+NOISE = "env.device_noise={height: 0.05, scale: 0.03}"
+
+
+def _env(num_envs: int, *sets: str):
+    resolved = load(None, REGISTRY, shorthands={"sensors": "three_point"}, assignments=list(sets))
+    return env_from_recipe(resolved, num_envs=num_envs, threads=1)
+
+
+def test_draws_stay_in_range_and_differ_between_episodes() -> None:
+    noise = DeviceNoise(DeviceNoiseOptions(height=0.05, scale=0.03), num_envs=4000, seed=0)
+    assert noise.offset.abs().max() <= 0.05 and noise.offset.abs().max() > 0.045
+    assert (noise.scale - 1).abs().max() <= 0.03 and noise.offset.std() > 0.02
+    before = noise.offset.clone()
+    noise.redraw(torch.tensor([0, 1]))
+    assert not torch.equal(noise.offset[:2], before[:2])
+    assert torch.equal(noise.offset[2:], before[2:])  # other episodes keep theirs
+
+
+def test_heights_move_only_while_active() -> None:
+    noise = DeviceNoise(DeviceNoiseOptions(height=0.05, scale=0.0), num_envs=3, seed=1)
+    devices = torch.rand(3, 2, 3, 7, dtype=torch.float64)
+    assert noise.apply(devices) is devices  # inactive: evaluation, play, live
+    noise.active = True
+    moved = noise.apply(devices)
+    assert torch.equal(moved[..., :2], devices[..., :2]) and torch.equal(moved[..., 3:],
+                                                                        devices[..., 3:])
+    shift = moved[..., 2] - devices[..., 2]
+    # one offset per episode, the same for every device and frame of its window
+    assert torch.allclose(shift, noise.offset.double()[:, None, None].expand_as(shift))
+
+
+def test_state_round_trips_and_a_wrong_batch_is_refused() -> None:
+    options = DeviceNoiseOptions()
+    noise = DeviceNoise(options, num_envs=5, seed=2)
+    again = DeviceNoise(options, num_envs=5, seed=9)
+    again.load_state_dict(noise.state_dict())
+    noise.redraw(torch.arange(5))
+    again.redraw(torch.arange(5))
+    assert torch.equal(noise.offset, again.offset) and torch.equal(noise.scale, again.scale)
+    with pytest.raises(ValueError, match="5 environments, this env 3"):
+        DeviceNoise(options, num_envs=3, seed=0).load_state_dict(noise.state_dict())
+
+
+def test_the_env_moves_the_students_devices_only_in_training() -> None:
+    plain, noisy = _env(8), _env(8, NOISE)
+    exact = plain.reset()["actor"]
+    torch.testing.assert_close(exact, noisy.reset()["actor"])  # inactive: the same starts
+    noisy.device_noise.active = True
+    obs = noisy.observe(noisy._context(torch.zeros(8, noisy.action_dim)))["actor"]
+    # three_point, past 1: per frame headset xyz + 6D, so column 2 is the headset's height
+    dz = obs[:, 2] - exact[:, 2]
+    assert dz.abs().max() > 0.01  # up to 5 cm and 3% of 1.6 m
+    noise = noisy.device_noise
+    torch.testing.assert_close(dz, noise.offset + (noise.scale - 1) * exact[:, 2])
+    torch.testing.assert_close(obs[:, 3:9], exact[:, 3:9])  # rotations untouched
+
+
+def test_training_turns_it_on_and_leaves_it_off(tmp_path) -> None:
+    from retarget.train.run_dir import new_run_dir
+    from retarget.train.runner import Budget, Trainer
+
+    resolved = load(None, REGISTRY, shorthands={"sensors": "three_point"},
+                    assignments=[NOISE, "env.num_envs=4", "algorithm.rollout_steps=8",
+                                 "algorithm.minibatch_size=16", "algorithm.epochs=1"])  # fmt: skip
+    trainer = Trainer(resolved, new_run_dir(tmp_path, "noise"), threads=1, tensorboard=False)
+    seen: list[bool] = []
+    trainer.train(Budget(steps=64), on_iteration=lambda p: seen.append(
+        trainer.env.device_noise.active))
+    assert seen and all(seen)
+    assert trainer.env.device_noise.active is False

@@ -1,0 +1,90 @@
+"""Driving a run from recorded devices as a VR user does (``retarget.eval.recorded``) and
+``benchmarks/follow_recordings.py``, which measures it on held-out performers."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from retarget.eval.recorded import drive_recordings, follow, follow_figures
+from retarget.motion.device_recording import read_recording
+from retarget.registry.loader import load_plugins
+
+sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
+from follow_recordings import performer_recording
+
+REGISTRY = load_plugins(strict=True)
+SAMPLE = Path(__file__).parents[2] / "examples" / "recordings" / "walk_openxr.jsonl"
+RUN = "pretrained:human-three_point-student"
+
+
+def _shorter(rec, seconds: float):
+    from retarget.motion.device_recording import DeviceRecording
+
+    keep = rec.time - rec.time[0] <= seconds
+    return DeviceRecording(rec.time[keep], rec.poses[keep], rec.tracked[keep])
+
+
+def test_each_environment_plays_its_own_recording_as_it_would_alone() -> None:
+    rec = read_recording(SAMPLE)
+    short = _shorter(rec, 1.0)
+    both = drive_recordings(RUN, REGISTRY, [rec, short])
+    assert both.lengths[1] < both.lengths[0] and len(both.rows[1]) == both.lengths[1]
+    lib = both.loaded.env.library
+    # calibrated to the character: both start on the idle body's headset, standing
+    first = [int(r[0]) for r in both.rows]
+    torch.testing.assert_close(lib.devices[first[0]], lib.devices[first[1]])
+    gaps = follow(both)
+    assert [len(g) for g in gaps] == [n - 1 for n in both.lengths]
+    assert gaps[0][0] < 0.15  # the avatar starts under the headset
+    alone = follow(drive_recordings(RUN, REGISTRY, [short]))[0]
+    np.testing.assert_allclose(gaps[1], alone, atol=1e-4)  # a batch changes nothing
+
+
+def test_a_height_offset_moves_every_device_up() -> None:
+    rec = _shorter(read_recording(SAMPLE), 0.5)
+    plain = drive_recordings(RUN, REGISTRY, [rec])
+    higher = drive_recordings(RUN, REGISTRY, [rec], height_offset=0.04)
+    rows = torch.as_tensor(plain.rows[0])
+    a, b = plain.loaded.env.library.devices[rows], higher.loaded.env.library.devices[rows]
+    torch.testing.assert_close(b[..., 2] - a[..., 2], torch.full_like(a[..., 2], 0.04))
+    torch.testing.assert_close(b[..., :2], a[..., :2])
+
+
+def test_a_recording_that_does_not_start_standing_is_refused() -> None:
+    from retarget.motion.device_recording import DeviceRecording
+
+    rec = read_recording(SAMPLE)
+    lying = rec.poses.copy()
+    lying[..., 2] = 0.1  # the headset at 10 cm: nobody stands there
+    with pytest.raises(ValueError, match="standing"):
+        drive_recordings(RUN, REGISTRY, [DeviceRecording(rec.time, lying, rec.tracked)])
+
+
+def test_figures_of_one_stream() -> None:
+    gaps = np.array([0.1, 0.2, 0.6, 0.1])
+    f = follow_figures(gaps, hz=2.0)
+    assert f["followed"] == 0.0 and f["lost_at_s"] == 1.0 and f["seconds"] == 2.0
+    assert f["max_gap_cm"] == pytest.approx(60.0) and f["gap_cm"] == pytest.approx(25.0)
+    assert follow_figures(gaps[:2], hz=2.0)["followed"] == 1.0
+
+
+def test_a_performer_sets_off_from_standing() -> None:
+    """The corpus's walks start mid-stride; the benchmark's recording of one starts standing
+    and keeps the take after the set-off."""
+    from retarget.motion.import_bvh import load_bvh
+    from retarget.motion.shared_data import shared_data
+
+    shared_walk = shared_data("mocap") / "bandai_d2_walk_normal_020.bvh"
+    if not shared_walk.is_file():
+        pytest.skip(f"shared mocap clip {shared_walk} not found (set RETARGET_SHARED_DATA)")
+    clip = load_bvh(shared_walk)
+    rec = performer_recording(shared_walk)
+    assert rec is not None
+    speed = np.linalg.norm(np.diff(rec.poses[:, 0, :2], axis=0), axis=1) / np.diff(rec.time)
+    assert speed[: int(0.4 / np.diff(rec.time).mean())].max() < 0.1  # standing at first
+    assert rec.time[-1] > 0.6 * clip.num_frames / clip.fps  # most of the take is kept
