@@ -147,6 +147,7 @@ def _train(args: argparse.Namespace, registry: Registry, comm: Comm) -> int:
     from retarget.train.load import prepared_recipe
     from retarget.train.runner import Trainer
     from retarget.train.start import (
+        check_motion_source,
         check_start,
         resume_recipe,
         run_name,
@@ -174,6 +175,7 @@ def _train(args: argparse.Namespace, registry: Registry, comm: Comm) -> int:
                                                num_envs=args.num_envs, threads=args.threads),
                             *args.assignments]  # fmt: skip
         resolved = prepared_recipe(load_from_args(args, registry), registry)
+        check_motion_source(resolved.recipe.motions)
         # only rank 0 creates it; removed again if the start fails
         context = (starting_run(args.runs_dir, run_name(resolved)) if comm.main
                    else nullcontext(Path()))  # fmt: skip

@@ -15,6 +15,7 @@ from retarget.train.run_dir import LOCK, default_run_name
 
 if TYPE_CHECKING:
     from retarget.recipe import ResolvedRecipe
+    from retarget.recipe.model import MotionsSection
     from retarget.registry import Registry
 
 SETTINGS = "train_settings.json"
@@ -45,6 +46,31 @@ def check_start(*, resume: str | Path | None, init_from: bool, teacher: bool, ex
             "--resume continues with the run's own environment count",
             file=str(Path(resume) / LOCK),
             hint="drop --num-envs (a checkpoint holds every environment's state)",
+        )
+
+
+def check_motion_source(motions: MotionsSection) -> None:
+    """Refuse a recipe that picks motion files by pattern but names no files to pick from
+    (no ``motions.path``, no ``$RETARGET_DATA``): it would train on the packaged generated
+    clips, which no pattern was written for. A shipped model's lock is such a recipe (its
+    data is left out of the package), so fine-tuning one from its lock needs ``--motions``."""
+    import os
+
+    from retarget.motion.sources import ENV_VAR
+
+    if motions.path or os.environ.get(ENV_VAR, "").strip():
+        return
+    picks = {k: v for k, v in (("include", motions.include), ("exclude", motions.exclude)) if v}
+    if picks:
+        shown = ", ".join(f"motions.{k}={v}" for k, v in picks.items())
+        raise RecipeError(
+            f"the recipe picks motion files ({shown}) but names none to pick from "
+            f"(motions.path is empty and ${ENV_VAR} unset), so it would train on the packaged "
+            "generated clips; a shipped model's lock leaves its data out",
+            field="motions.path",
+            hint="give --motions PATH (e.g. ../shared/data/mocap_corpus), or drop the "
+            "patterns (--set motions.include=[] --set motions.exclude=[]) to train on the "
+            "generated clips",
         )
 
 

@@ -167,3 +167,28 @@ def test_resume_keeps_the_runs_settings_and_its_budget_is_more(tmp_path: Path) -
     ckpts = sorted((run / "checkpoints").glob("ckpt-*.pt"))
     assert len(ckpts) == after["iteration"]  # one per iteration, as recorded
     assert not (run / "tensorboard").exists()
+
+
+def test_a_shipped_models_lock_needs_its_motions_given(
+    tmp_path: Path, capsys, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A shipped lock holds out a style by pattern but carries no motion path: training from
+    it must not fall back to the generated clips unnoticed; with --motions it starts."""
+    from retarget.motion.sources import ENV_VAR
+
+    monkeypatch.delenv(ENV_VAR, raising=False)
+    recipe = tmp_path / "tiny.yaml"
+    recipe.write_text(TINY)
+    args = ["train", str(recipe), "--set", "motions.exclude=['*_normal_*']", "--steps", "16",
+            "--runs-dir", str(tmp_path), "--no-tensorboard"]  # fmt: skip
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "motions.path" in err and "--motions" in err and "*_normal_*" in err
+    assert not (tmp_path / "tiny").exists()  # no run directory left behind
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    from retarget.motion.bvh_write import write_bvh
+    from retarget.motion.procedural import default_motions
+
+    write_bvh(default_motions()[1], clips / "walk_active_001.bvh")
+    assert main([*args, "--motions", str(clips)]) == 0
