@@ -34,6 +34,7 @@ import torch
 from retarget.character.kinematic import root_height_ratio, scaled_clip
 from retarget.env.curriculum import FailureCurriculum
 from retarget.env.device_noise import DeviceNoise
+from retarget.env.idle_starts import IdleStarts
 from retarget.env.managers import RewardManager, TerminationManager
 from retarget.env.observation_manager import ObservationManager, PluginSource
 from retarget.env.observations import Privileged, Proprio
@@ -95,6 +96,10 @@ class RetargetEnv:
         self._mocap_ids = self._scene_mocap_ids()
         self.reference = CharacterReference(character, self.world.model, layout, clips,
                                             mocap=self._clip_placements(len(clips)))  # fmt: skip
+        self.idle_starts = None
+        if opts.idle_starts > 0:
+            self.idle_starts = IdleStarts(opts.idle_starts, self.library.from_rest,
+                                          self._idle_qpos(hz))  # fmt: skip
         self.sim = make_sim(self.world.model, layout, n, sim)
         self.reference.use_servos(self.sim.model)  # the servos exist once the sim set them up
         self.sensors, self.observers = list(sensors), list(observers)
@@ -219,6 +224,18 @@ class RetargetEnv:
         come from which sensor or observer (used to carry weights between recipes)."""
         return self.observations.layout
 
+    def _idle_qpos(self, hz: float) -> np.ndarray:
+        """The character's idle standing pose: where ``retarget serve`` and ``play --input``
+        start (the same frame of the same generated idle clip, retargeted as the library)."""
+        from retarget.motion.procedural import idle_clip
+
+        idle = idle_clip(1.0)
+        if self.options.devices == "character":
+            idle = scaled_clip(idle, root_height_ratio(self.character.build_spec().compile(), idle))
+        ref = CharacterReference(self.character, self.world.model, self.layout,
+                                 [resample(idle, hz)])  # fmt: skip
+        return ref.qpos64[min(2, len(ref.qpos64) - 1)].copy()
+
     def _default_groups(self) -> dict[str, list[str]]:
         actor = [s.name for s in self.sensors] + ["proprio"] + [o.name for o in self.observers]
         return {"actor": actor, "critic": [*actor, "privileged"]}
@@ -275,12 +292,19 @@ class RetargetEnv:
         kinematic pose there."""
         if env_ids.numel() == 0:
             return
+        idle = None
         if clip is None or frame is None:
             sampler = self.curriculum or self.library
             clip, frame = sampler.sample(int(env_ids.numel()), self.generator, margin=2)
+            if self.idle_starts is not None:
+                idle = self.idle_starts.choose(clip, frame, self.generator).numpy()
         self.clip[env_ids], self.frame[env_ids] = clip, frame
         rows = self.library.rows(clip, frame)[:, 0].numpy()
         qpos = self.reference.qpos64[rows].copy()
+        qvel = self.reference.qvel64[rows].copy()
+        if idle is not None and idle.any():
+            qpos[idle] = self.idle_starts.pose(qpos[idle])
+            qvel[idle] = 0.0
         qpos[:, 2] += self.options.reset_lift
         mocap = None
         # a new episode gets new prop placements (Sec. 3.4)
@@ -290,7 +314,7 @@ class RetargetEnv:
         if self._mocap_ids.size:
             pos, quat = self.scene.mocap_poses(env_ids)
             mocap = (self._mocap_ids, pos.numpy(), quat.numpy())
-        self.sim.reset(env_ids.numpy(), qpos, self.reference.qvel64[rows], mocap)
+        self.sim.reset(env_ids.numpy(), qpos, qvel, mocap)
         if self.device_noise is not None:
             self.device_noise.redraw(env_ids)
         self.episode_step[env_ids] = 0

@@ -60,6 +60,11 @@ class MotionLibrary:
             w = w + w
         self.fps = float(fps)
         self.names = [c.name for c in items]
+        self.from_rest = torch.tensor(
+            [i for i, c in enumerate(items) if c.meta.get("rest_end") == "from_rest"],
+            dtype=torch.long,
+        )
+        """Clips that set off from standing still (:mod:`retarget.motion.rest_ends`)."""
         lengths = np.array([c.num_frames for c in items], dtype=np.int64)
         starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
 

@@ -93,6 +93,12 @@ class EnvOptions(BaseModel):
         description="training only: a root force/torque toward the reference, annealed to "
         "zero over anneal_steps (null: none); e.g. {strength: 1, anneal_steps: 3000000}",
     )
+    idle_starts: float = Field(
+        0.0, ge=0.0, le=1.0,
+        description="share of training episodes that start standing in the character's idle "
+        "pose (where live sessions start) at frame 0 of a clip that sets off from rest "
+        "(motions.rest_ends), instead of in the reference's pose; 0: none",
+    )
     device_noise: DeviceNoiseOptions | None = Field(
         None,
         description="training only: each episode's headset and controllers sit higher or lower "
