@@ -99,7 +99,7 @@ class RetargetEnv:
         self.idle_starts = None
         if opts.idle_starts > 0:
             self.idle_starts = IdleStarts(opts.idle_starts, self.library.from_rest,
-                                          self._idle_qpos(hz))  # fmt: skip
+                                          self.idle_qpos(hz))  # fmt: skip
         self.sim = make_sim(self.world.model, layout, n, sim)
         self.reference.use_servos(self.sim.model)  # the servos exist once the sim set them up
         self.sensors, self.observers = list(sensors), list(observers)
@@ -224,7 +224,7 @@ class RetargetEnv:
         come from which sensor or observer (used to carry weights between recipes)."""
         return self.observations.layout
 
-    def _idle_qpos(self, hz: float) -> np.ndarray:
+    def idle_qpos(self, hz: float) -> np.ndarray:
         """The character's idle standing pose: where ``retarget serve`` and ``play --input``
         start (the same frame of the same generated idle clip, retargeted as the library)."""
         from retarget.motion.procedural import idle_clip

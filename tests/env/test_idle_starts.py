@@ -70,3 +70,22 @@ def test_without_set_off_clips_every_start_is_the_reference() -> None:
     rows = env.library.rows(env.clip, env.frame)[:, 0].numpy()
     np.testing.assert_allclose(env.sim.state.qpos.double().numpy()[:, 7:],
                                env.reference.qpos64[rows, 7:], atol=1e-5)  # fmt: skip
+
+
+def test_the_set_off_benchmark_runs_both_starts(tmp_path) -> None:
+    """``benchmarks/idle_set_off.py`` on a set-off made from a generated walk: each start
+    runs every clip to its end or its failure."""
+    import sys
+    from pathlib import Path
+
+    from retarget.motion.bvh_write import write_bvh
+
+    sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
+    from idle_set_off import run_starts
+
+    write_bvh(_clips()[1], tmp_path / "walk_mid_from_rest.bvh")
+    for idle in (False, True):
+        r = run_starts("pretrained:human-teacher", tmp_path, idle, None)
+        assert r["clips"] == 1 and 0.0 <= r["success"] <= 1.0
+        assert 0.0 < r["time_to_failure_s"] <= r["seconds"] + 1e-9
+        assert list(r["per_clip"]) == ["walk_mid_from_rest"]
