@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import yaml
 from helpers import REPO, TINY_TEACHER
 
 from retarget.cli.main import main
@@ -37,4 +38,14 @@ def test_example_recipe_trains(recipe: Path, tmp_path: Path) -> None:
     else:
         extra = ["--set", "algorithm.critic_hidden=[16]"]
     assert main(["recipe", "validate", str(recipe)]) == 0
+    motions = yaml.safe_load(recipe.read_text()).get("motions") or {}
+    if not motions.get("path") and (motions.get("include") or motions.get("exclude")):
+        # a corpus recipe, run with --motions (retarget train refuses patterns without files)
+        from retarget.motion.bvh_write import write_bvh
+        from retarget.motion.procedural import default_motions
+
+        clips = tmp_path / "corpus"
+        clips.mkdir()
+        write_bvh(default_motions()[1], clips / "dataset-2_walk_active_001.bvh")
+        extra += ["--motions", str(clips)]
     assert main(["train", str(recipe), "--runs-dir", str(tmp_path), *SMALL, *extra]) == 0
