@@ -33,53 +33,49 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from heldout_eval import KINDS, corpus_files
 
 
-def performer_recording(path: Path):
+def performer_recording(path: Path, formats):
     """The device recording a performer's clip would have given (every device tracked),
     starting as a VR user starts, from standing: a take cut mid-stride is replaced by its own
     start from rest (:mod:`retarget.motion.rest_ends`, the whole take after the set-off), a
     take that never moves is used as it is; None when the take cannot start from standing
-    (a run with no double support near its start)."""
-    import retarget
+    (a run with no double support near its start). ``formats``: the motion readers
+    (``retarget.load_plugins().motion_formats()``)."""
     from retarget.motion.clip_cache import read_cached
     from retarget.motion.device_recording import DeviceRecording
     from retarget.motion.devices import device_poses
     from retarget.motion.rest_ends import RestEnds, rest_ends, root_speed
     from retarget.motion.sources import reader_for
 
-    formats = retarget.load_plugins().motion_formats()
     clip = read_cached(reader_for(path, formats), path, None)
     ends = RestEnds()
     if root_speed(clip)[: round(ends.window * clip.fps)].mean() >= ends.min_speed:
         seconds = clip.num_frames / clip.fps
-        starts = [v for keep in (seconds - 1.5, seconds - 2.5, ends.keep)
-                  for v in rest_ends(clip, RestEnds(keep=max(keep, 0.0)))
-                  if v.meta["rest_end"] == "from_rest"]  # fmt: skip
-        if not starts:
+        start = None
+        for keep in (seconds - 1.5, seconds - 2.5, ends.keep):  # the longest that fits
+            made = rest_ends(clip, RestEnds(keep=max(keep, 0.0)))
+            start = next((v for v in made if v.meta["rest_end"] == "from_rest"), None)
+            if start is not None:
+                break
+        if start is None:
             return None
-        clip = starts[0]
+        clip = start
     poses = device_poses(clip.global_pos, clip.global_rot, clip.height)
     times = np.arange(len(poses)) / clip.fps
     return DeviceRecording(times, poses, np.ones(poses.shape[:2], dtype=bool))
 
 
-def measure(run: str, files: list[Path], offset: float, sets: list[str]) -> dict:
-    """Every clip of ``files`` driven at once (one environment each) with ``offset``."""
-    import retarget
+def measure(run: str, recordings: dict, offset: float, sets: list[str], registry) -> dict:
+    """Every recording (clip name -> recording) driven at once, one environment each, with
+    every device ``offset`` metres higher."""
     from retarget.eval.recorded import drive_recordings, follow, follow_figures
 
-    registry = retarget.load_plugins()
-    recordings = [performer_recording(f) for f in files]
-    files = [f for f, r in zip(files, recordings, strict=True) if r is not None]
-    recordings = [r for r in recordings if r is not None]
-    if not recordings:
-        return {"clips": 0}
-    drive = drive_recordings(run, registry, recordings, height_offset=offset,
+    drive = drive_recordings(run, registry, list(recordings.values()), height_offset=offset,
                              changes={"assignments": list(sets)})  # fmt: skip
     hz = drive.loaded.env.sim.settings.control_hz
     per_clip = [follow_figures(g, hz) for g in follow(drive)]
     pooled = {k: float(np.mean([c[k] for c in per_clip])) for k in per_clip[0]}
-    pooled["clips"] = len(files)
-    pooled["per_clip"] = {f.stem: c for f, c in zip(files, per_clip, strict=True)}
+    pooled["clips"] = len(recordings)
+    pooled["per_clip"] = dict(zip(recordings, per_clip, strict=True))
     return pooled
 
 
@@ -96,23 +92,30 @@ def main() -> int:
     parser.add_argument("--out", type=Path, help="JSON of every figure")
     args = parser.parse_args()
     offsets = [float(x) for x in args.offsets.split(",")]
+    import retarget
+
+    registry = retarget.load_plugins()
+    formats = registry.motion_formats()
+    recordings: dict[str, dict] = {}  # per kind: clip name -> recording (read once)
+    for kind in args.kinds.split(","):
+        files = corpus_files(args.style, kind, args.max_clips)
+        if not files:
+            print(f"no {kind} clips of style {args.style}", file=sys.stderr)
+        made = {f.stem: performer_recording(f, formats) for f in files}
+        recordings[kind] = {name: r for name, r in made.items() if r is not None}
     results: dict[str, dict] = {}
     for run in args.runs:
         results[run] = {}
         print(f"\n{run}: held-out style '{args.style}', devices of the performers")
         print(f"{'kind':8} {'offset cm':>9} {'clips':>5} {'followed':>8} {'gap cm':>7} "
               f"{'lost at s':>9} {'of s':>6} {'wall s':>6}")  # fmt: skip
-        for kind in args.kinds.split(","):
-            files = corpus_files(args.style, kind, args.max_clips)
-            if not files:
-                print(f"no {kind} clips of style {args.style}", file=sys.stderr)
+        for kind, named in recordings.items():
+            if not named:
+                print(f"{kind:8} no clip of this kind starts from standing")
                 continue
             for offset in offsets:
                 t0 = time.perf_counter()
-                r = measure(run, files, offset, args.sets)
-                if not r["clips"]:
-                    print(f"{kind:8} no clip of this kind starts from standing")
-                    break
+                r = measure(run, named, offset, args.sets, registry)
                 results[run][f"{kind} {offset:+.3f}"] = r
                 print(f"{kind:8} {100 * offset:9.1f} {r['clips']:5d} {r['followed']:8.2f} "
                       f"{r['gap_cm']:7.1f} {r['lost_at_s']:9.1f} {r['seconds']:6.1f} "

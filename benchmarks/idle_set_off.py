@@ -37,7 +37,7 @@ def run_starts(run: str, folder: Path, idle: bool, checkpoint: str | None) -> di
     import torch
 
     import retarget
-    from retarget.env.idle_starts import IdleStarts
+    from retarget.env.idle_starts import stand_under
     from retarget.kinds.capabilities import Acting, require
     from retarget.train.load import load_run
 
@@ -52,10 +52,8 @@ def run_starts(run: str, folder: Path, idle: bool, checkpoint: str | None) -> di
     assert lib.num_clips == count, "one library clip per file"
     clips, frames = torch.arange(count), torch.zeros(count, dtype=torch.long)
     if idle:
-        hz = env.sim.settings.control_hz
-        starts = IdleStarts(1.0, lib.from_rest, env.idle_qpos(hz))
         rows = lib.rows(clips, frames)[:, 0].numpy()
-        qpos = starts.pose(env.reference.qpos64[rows])
+        qpos = stand_under(env.idle_qpos(env.sim.settings.control_hz), env.reference.qpos64[rows])
         qpos[:, 2] += env.options.reset_lift
         env.place_state(clips, clips, frames, qpos, np.zeros_like(env.reference.qvel64[rows]))
         obs = env.observe_now()

@@ -29,7 +29,6 @@ class IdleStarts:
         self.share = float(share)
         self.from_rest = from_rest.long()
         self.idle_qpos = np.asarray(idle_qpos, dtype=np.float64)
-        self._yaw = float(rot.yaw(self.idle_qpos[3:7]))
 
     def choose(
         self, clip: torch.Tensor, frame: torch.Tensor, generator: torch.Generator
@@ -47,11 +46,17 @@ class IdleStarts:
         return idle
 
     def pose(self, ref_qpos: np.ndarray) -> np.ndarray:
-        """The idle pose ``(k, nq)`` standing where each reference pose ``(k, nq)`` has its
-        root (horizontal position and heading; the idle pose's own height and joints)."""
-        out = np.repeat(self.idle_qpos[None], len(ref_qpos), axis=0)
-        turn = rot.yaw(ref_qpos[:, 3:7]) - self._yaw
-        q = rot.from_axis_angle(np.array([0.0, 0.0, 1.0]), turn)
-        out[:, 3:7] = rot.normalize(rot.mul(q, out[:, 3:7]))
-        out[:, :2] = ref_qpos[:, :2]
-        return out
+        """The idle pose standing under each reference pose (see :func:`stand_under`)."""
+        return stand_under(self.idle_qpos, ref_qpos)
+
+
+def stand_under(idle_qpos: np.ndarray, ref_qpos: np.ndarray) -> np.ndarray:
+    """The idle pose ``(k, nq)`` standing where each reference pose ``(k, nq)`` has its root
+    (horizontal position and heading; the idle pose's own height and joints)."""
+    idle_qpos = np.asarray(idle_qpos, dtype=np.float64)
+    out = np.repeat(idle_qpos[None], len(ref_qpos), axis=0)
+    turn = rot.yaw(ref_qpos[:, 3:7]) - float(rot.yaw(idle_qpos[3:7]))
+    q = rot.from_axis_angle(np.array([0.0, 0.0, 1.0]), turn)
+    out[:, 3:7] = rot.normalize(rot.mul(q, out[:, 3:7]))
+    out[:, :2] = ref_qpos[:, :2]
+    return out

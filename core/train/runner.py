@@ -269,6 +269,8 @@ class Trainer:
             self._notify("on_train_start", self.run, recipe, self.progress.iteration > 0)
         ended = "error"
         try:
+            if self.env.device_noise is not None:  # training alone sees the devices' noise
+                self.env.device_noise.active = True
             start = time.perf_counter() - self.progress.elapsed
             while not self.comm.any(budget.done(self.progress.env_steps, self.progress.elapsed)):
                 before = self.env.total_steps
@@ -276,8 +278,6 @@ class Trainer:
                 assist = self.env.root_assist
                 if assist is not None:  # training alone gets the annealed root assist
                     assist.scale = assist.options.scale_at(self.progress.env_steps)
-                if self.env.device_noise is not None:  # and the devices' calibration noise
-                    self.env.device_noise.active = True
                 result = as_result(self.algorithm.train_iteration(self.env))
                 self._check_finite(result)
                 self.headline = result.headline

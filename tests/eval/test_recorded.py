@@ -83,7 +83,9 @@ def test_a_performer_sets_off_from_standing() -> None:
     if not shared_walk.is_file():
         pytest.skip(f"shared mocap clip {shared_walk} not found (set RETARGET_SHARED_DATA)")
     clip = load_bvh(shared_walk)
-    rec = performer_recording(shared_walk)
+    import retarget
+
+    rec = performer_recording(shared_walk, retarget.load_plugins().motion_formats())
     assert rec is not None
     speed = np.linalg.norm(np.diff(rec.poses[:, 0, :2], axis=0), axis=1) / np.diff(rec.time)
     assert speed[: int(0.4 / np.diff(rec.time).mean())].max() < 0.1  # standing at first
