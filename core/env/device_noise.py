@@ -12,6 +12,12 @@ walk whatever they are. Only device poses change: the reference body, rewards an
 do not see it, and evaluation, play, export and live sessions never do (``active`` is set by
 a trainer each iteration and false everywhere else).
 
+With ``lost`` above 0, a controller also loses tracking now and then (a chance per second;
+each loss lasts up to ``lost_seconds``): from the frame it is lost its pose is held, in every
+entry of the device window from that frame on, as ``serve`` and ``play --input`` hold an
+untracked device. A real stream loses a controller whenever it leaves the cameras' view; a
+student never trained on that falls when the held controller drifts behind the walking body.
+
 The draws come from their own generator, so turning the noise on leaves every other random
 choice of a run (starts, scenes) as it was; offsets and generator are saved with the
 environment's state, so a resumed run continues the same episodes.
@@ -19,7 +25,7 @@ environment's state, so a resumed run continues the same episodes.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 
 import torch
 
@@ -29,12 +35,20 @@ from retarget.settings.env import DeviceNoiseOptions
 class DeviceNoise:
     """Per-environment offset and scale of device heights, redrawn at every reset."""
 
-    def __init__(self, options: DeviceNoiseOptions, num_envs: int, seed: int) -> None:
+    CONTROLLERS = (1, 2)  # device order: headset, left, right; the headset is not lost
+
+    def __init__(self, options: DeviceNoiseOptions, num_envs: int, seed: int,
+                 control_dt: float = 1.0 / 30.0) -> None:  # fmt: skip
         self.options = options
         self.active = False  # set by a trainer each iteration; false everywhere else
         self.generator = torch.Generator().manual_seed(seed + 7919)
         self.offset = torch.zeros(num_envs)
         self.scale = torch.ones(num_envs)
+        self.control_dt = control_dt
+        # per environment and controller: the frame tracking was lost at and the last frame
+        # it stays lost (-1: tracked)
+        self.lost_from = torch.full((num_envs, len(self.CONTROLLERS)), -1, dtype=torch.long)
+        self.lost_to = torch.full_like(self.lost_from, -1)
         self.redraw(torch.arange(num_envs))
 
     def redraw(self, env_ids: torch.Tensor) -> None:
@@ -45,6 +59,38 @@ class DeviceNoise:
         u = torch.rand(2, n, generator=self.generator) * 2.0 - 1.0
         self.offset[env_ids] = u[0] * self.options.height
         self.scale[env_ids] = 1.0 + u[1] * self.options.scale
+        self.lost_from[env_ids] = -1
+        self.lost_to[env_ids] = -1
+
+    def hold(self, devices: torch.Tensor, frame: torch.Tensor, window: Sequence[int],
+             pose_at: Callable[[torch.Tensor], torch.Tensor]) -> torch.Tensor:  # fmt: skip
+        """``devices`` ``(N, W, D, 7)`` (window frames ``frame + window``) with lost controllers
+        held at their pose of the frame they were lost (a copy); ``pose_at(frames)`` gives the
+        ``(N, D, 7)`` devices of each environment's clip at ``frames`` ``(N,)``. Unchanged when
+        inactive or ``lost`` is 0."""
+        if not self.active or self.options.lost <= 0.0:
+            return devices
+        n, k = self.lost_from.shape
+        frame = frame.long()
+        ended = (self.lost_from >= 0) & ((frame[:, None] > self.lost_to)
+                                         | (frame[:, None] < self.lost_from))  # fmt: skip
+        self.lost_from[ended] = -1
+        u = torch.rand(2, n, k, generator=self.generator)
+        start = (self.lost_from < 0) & (u[0] < self.options.lost * self.control_dt)
+        length = (u[1] * self.options.lost_seconds / self.control_dt).long()
+        frames = frame[:, None].expand(n, k)
+        self.lost_from = torch.where(start, frames, self.lost_from)
+        self.lost_to = torch.where(start, frames + length, self.lost_to)
+        if not bool((self.lost_from >= 0).any()):
+            return devices
+        out = devices.clone()
+        at = frame[:, None] + torch.as_tensor(window, dtype=torch.long)[None, :]  # (N, W)
+        for j, d in enumerate(self.CONTROLLERS):
+            lost = self.lost_from[:, j]
+            held = pose_at(lost.clamp(min=0))[:, d]  # (N, 7)
+            mask = (lost[:, None] >= 0) & (at >= lost[:, None])  # (N, W)
+            out[:, :, d] = torch.where(mask[..., None], held[:, None].to(out.dtype), out[:, :, d])
+        return out
 
     def apply(self, devices: torch.Tensor) -> torch.Tensor:
         """``devices`` ``(N, W, D, 7)`` with heights moved (a copy); unchanged when inactive."""
@@ -61,6 +107,8 @@ class DeviceNoise:
         return {
             "offset": self.offset.clone(),
             "scale": self.scale.clone(),
+            "lost_from": self.lost_from.clone(),
+            "lost_to": self.lost_to.clone(),
             "generator": self.generator.get_state(),
         }
 
@@ -72,4 +120,7 @@ class DeviceNoise:
             )
         self.offset = state["offset"].clone()
         self.scale = state["scale"].clone()
+        if "lost_from" in state:  # states saved before losses of tracking existed have none
+            self.lost_from = state["lost_from"].clone()
+            self.lost_to = state["lost_to"].clone()
         self.generator.set_state(state["generator"])

@@ -145,7 +145,7 @@ class RetargetEnv:
             mass = float(self.world.model.body_subtreemass[root])
             height = 1.9 * float(np.median(self.reference.qpos64[:, 2]))
             self.root_assist = RootAssist(opts.root_assist, mass, height)
-        self.device_noise = (DeviceNoise(opts.device_noise, n, seed)
+        self.device_noise = (DeviceNoise(opts.device_noise, n, seed, self.sim.settings.control_dt)
                              if opts.device_noise is not None else None)  # fmt: skip
         self.generator = torch.Generator().manual_seed(seed)
         self.clip = torch.zeros(n, dtype=torch.long)
@@ -246,12 +246,21 @@ class RetargetEnv:
 
     # ------------------------------------------------------------------ reference
 
+    def _noisy_devices_at(self, frames: torch.Tensor) -> torch.Tensor:
+        """``(N, D, 7)`` devices of each environment's clip at ``frames``, calibration noise
+        included (where a lost controller is held)."""
+        lib = self.library
+        devices = lib.devices[lib.rows(self.clip, frames)[:, 0]][:, None]
+        return self.device_noise.apply(devices)[:, 0]
+
     def _context(self, action: torch.Tensor) -> StepContext:
         lib = self.library
         rows = lib.rows(self.clip, self.frame)[:, 0]
         devices = lib.devices[lib.rows(self.clip, self.frame, self.window_offsets)]
         if self.device_noise is not None:
             devices = self.device_noise.apply(devices)
+            devices = self.device_noise.hold(devices, self.frame, self.window_offsets,
+                                             self._noisy_devices_at)  # fmt: skip
         need = self._needs
         ahead = {}
         if need.reference_offsets:

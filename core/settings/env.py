@@ -51,6 +51,14 @@ class DeviceNoiseOptions(BaseModel):
         0.03, ge=0.0, le=0.3,
         description="half-range of an episode's height scale (about the floor)",
     )
+    lost: float = Field(
+        0.0, ge=0.0, le=10.0,
+        description="chance per second that a controller loses tracking and is held at its "
+        "last pose (as live sessions hold it); 0: never",
+    )
+    lost_seconds: float = Field(
+        0.5, gt=0.0, le=5.0, description="longest loss of tracking, s (each uniform up to it)"
+    )
 
 
 class EnvOptions(BaseModel):

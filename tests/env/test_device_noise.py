@@ -82,3 +82,70 @@ def test_training_turns_it_on_and_leaves_it_off(tmp_path) -> None:
         trainer.env.device_noise.active))
     assert seen and all(seen)
     assert trainer.env.device_noise.active is False
+
+
+def _poses_by_frame(frames: torch.Tensor) -> torch.Tensor:
+    """``(N, 3, 7)`` devices whose every number is the frame they belong to."""
+    return frames.double()[:, None, None].expand(-1, 3, 7).clone()
+
+
+def test_lost_controllers_are_held_at_the_frame_they_were_lost() -> None:
+    options = DeviceNoiseOptions(height=0.0, scale=0.0, lost=10.0, lost_seconds=1.0)
+    noise = DeviceNoise(options, num_envs=64, seed=3, control_dt=1.0 / 30.0)
+    window = (-2, -1, 0)
+    frame = torch.full((64,), 10)
+    devices = torch.stack([_poses_by_frame(frame + w) for w in window], dim=1)  # (N, W, D, 7)
+    assert noise.hold(devices, frame, window, _poses_by_frame) is devices  # inactive
+    noise.active = True
+    seen_lost = 0
+    for step in range(30):
+        frame = torch.full((64,), 10 + step)
+        devices = torch.stack([_poses_by_frame(frame + w) for w in window], dim=1)
+        held = noise.hold(devices, frame, window, _poses_by_frame)
+        assert torch.equal(held[:, :, 0], devices[:, :, 0])  # the headset is never lost
+        for j, d in enumerate(DeviceNoise.CONTROLLERS):
+            lost = noise.lost_from[:, j]
+            for w_i, w in enumerate(window):
+                entry = frame + w
+                expect = torch.where((lost >= 0) & (entry >= lost), lost, entry).double()
+                assert torch.equal(held[:, w_i, d, 0], expect)
+            seen_lost += int((lost >= 0).sum())
+    assert seen_lost > 0
+    # a loss ends: past its last frame the controller follows again
+    later = torch.full((64,), 10 + 30 + 31)
+    noise.options = DeviceNoiseOptions(height=0.0, scale=0.0, lost=1e-9)
+    out = noise.hold(_poses_by_frame(later)[:, None], later, (0,), _poses_by_frame)
+    assert torch.equal(out[:, 0, :, 0], later.double()[:, None].expand(-1, 3))
+
+
+def test_lost_state_round_trips_and_old_states_load() -> None:
+    options = DeviceNoiseOptions(lost=10.0)
+    noise = DeviceNoise(options, num_envs=8, seed=4)
+    noise.active = True
+    frame = torch.full((8,), 5)
+    for _ in range(5):
+        noise.hold(_poses_by_frame(frame)[:, None], frame, (0,), _poses_by_frame)
+    assert (noise.lost_from >= 0).any()
+    again = DeviceNoise(options, num_envs=8, seed=0)
+    again.load_state_dict(noise.state_dict())
+    assert torch.equal(again.lost_from, noise.lost_from)
+    assert torch.equal(again.lost_to, noise.lost_to)
+    old = {k: v for k, v in noise.state_dict().items() if not k.startswith("lost")}
+    DeviceNoise(options, num_envs=8, seed=0).load_state_dict(old)  # saved before: no losses
+    noise.redraw(torch.arange(8))
+    assert (noise.lost_from == -1).all()  # a new episode starts tracked
+
+
+def test_the_env_holds_a_lost_controller_in_training() -> None:
+    env = _env(16, "env.device_noise={height: 0.0, scale: 0.0, lost: 10.0, lost_seconds: 2.0}")
+    env.reset()
+    env.device_noise.active = True
+    for _ in range(12):
+        ctx = env._context(torch.zeros(16, env.action_dim))
+        env.frame = env.frame + 1
+    lost = env.device_noise.lost_from[:, 0]
+    assert (lost >= 0).any()
+    n = int(torch.nonzero(lost >= 0)[0, 0])
+    lib = env.library
+    held = lib.devices[lib.rows(env.clip[n : n + 1], lost[n : n + 1])[:, 0]][0, 1]
+    torch.testing.assert_close(ctx.ref.devices[n, -1, 1], held.to(ctx.ref.devices.dtype))
