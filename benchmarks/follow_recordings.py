@@ -3,6 +3,7 @@ controllers of held-out performers, calibrated on their standing start.
 
     python benchmarks/follow_recordings.py pretrained:human-three_point-student --max-clips 8
     python benchmarks/follow_recordings.py RUN --kinds walk --offsets 0,0.02,-0.02,0.05,-0.05
+    python benchmarks/follow_recordings.py RUN --kinds walk,turn --offsets 0 --lose 0.25
 
 For each held-out clip of the corpus (``heldout_eval.corpus_files``), set off from standing
 still as a user does (the corpus's takes start mid-stride), the performer's own device
@@ -11,8 +12,11 @@ character's retargeted body) become a recording, which drives the run from a sta
 exactly as ``retarget play --input`` and ``retarget serve`` do
 (:mod:`retarget.eval.recorded`): the character's size is calibrated once, from the first
 headset height. ``--offsets`` then moves every device up or down by a few centimetres more (a
-headset worn higher, a calibration taken slouching). ``retarget eval`` feeds devices taken from
-the retargeted reference instead, exact to the millimetre; this measures what a user sees.
+headset worn higher, a calibration taken slouching); ``--lose S`` makes each controller lose
+tracking for S seconds every 3 s (the left from 2 s, the right from 3.5 s), held at its last
+pose as a live session holds it, as a hand leaving the headset cameras' view does.
+``retarget eval`` feeds devices taken from the retargeted reference instead, exact to the
+millimetre; this measures what a user sees.
 
 Figures per kind and offset: the share of clips followed to the end (the head never over
 0.5 m from the headset, SimXR's rule), the mean head-to-headset distance (cm) and the mean time
@@ -64,6 +68,19 @@ def performer_recording(path: Path, formats):
     return DeviceRecording(times, poses, np.ones(poses.shape[:2], dtype=bool))
 
 
+def lose_controllers(recording, seconds: float, every: float = 3.0):
+    """The recording with each controller untracked for ``seconds`` every ``every`` seconds
+    (the left from 2 s, the right from 3.5 s)."""
+    from retarget.motion.device_recording import DeviceRecording
+
+    t = recording.time - recording.time[0]
+    tracked = recording.tracked.copy()
+    for device, first in ((1, 2.0), (2, 3.5)):
+        phase = (t - first) % every
+        tracked[:, device] &= ~((t >= first) & (phase < seconds))
+    return DeviceRecording(recording.time, recording.poses, tracked)
+
+
 def measure(run: str, recordings: dict, offset: float, sets: list[str], registry) -> dict:
     """Every recording (clip name -> recording) driven at once, one environment each, with
     every device ``offset`` metres higher."""
@@ -89,6 +106,8 @@ def main() -> int:
                         help="comma-separated extra device heights, m (default 0,0.03,-0.03)")
     parser.add_argument("--set", dest="sets", action="append", default=[],
                         help="recipe changes for the run (as retarget play --set)")
+    parser.add_argument("--lose", type=float, default=0.0, metavar="S",
+                        help="each controller loses tracking for S seconds every 3 s")
     parser.add_argument("--out", type=Path, help="JSON of every figure")
     args = parser.parse_args()
     offsets = [float(x) for x in args.offsets.split(",")]
@@ -102,11 +121,13 @@ def main() -> int:
         if not files:
             print(f"no {kind} clips of style {args.style}", file=sys.stderr)
         made = {f.stem: performer_recording(f, formats) for f in files}
-        recordings[kind] = {name: r for name, r in made.items() if r is not None}
+        recordings[kind] = {name: (lose_controllers(r, args.lose) if args.lose > 0 else r)
+                            for name, r in made.items() if r is not None}  # fmt: skip
     results: dict[str, dict] = {}
     for run in args.runs:
         results[run] = {}
-        print(f"\n{run}: held-out style '{args.style}', devices of the performers")
+        lost = f", controllers lost {args.lose:g} s every 3 s" if args.lose > 0 else ""
+        print(f"\n{run}: held-out style '{args.style}', devices of the performers{lost}")
         print(f"{'kind':8} {'offset cm':>9} {'clips':>5} {'followed':>8} {'gap cm':>7} "
               f"{'lost at s':>9} {'of s':>6} {'wall s':>6}")  # fmt: skip
         for kind, named in recordings.items():

@@ -111,6 +111,7 @@ class EnvOptions(BaseModel):
         None,
         description="training only: each episode's headset and controllers sit higher or lower "
         "(a vertical offset and a height scale drawn per episode), so a device-driven policy "
-        "does not depend on a calibration exact to the centimetre (null: exact devices); "
-        "e.g. {height: 0.05, scale: 0.03}",
+        "does not depend on a calibration exact to the centimetre, and controllers that lose "
+        "tracking now and then (null: exact devices); e.g. {height: 0.05, scale: 0.03, "
+        "lost: 0.5}",
     )

@@ -15,7 +15,7 @@ from retarget.motion.device_recording import read_recording
 from retarget.registry.loader import load_plugins
 
 sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
-from follow_recordings import performer_recording
+from follow_recordings import lose_controllers, performer_recording
 
 REGISTRY = load_plugins(strict=True)
 SAMPLE = Path(__file__).parents[2] / "examples" / "recordings" / "walk_openxr.jsonl"
@@ -90,3 +90,16 @@ def test_a_performer_sets_off_from_standing() -> None:
     speed = np.linalg.norm(np.diff(rec.poses[:, 0, :2], axis=0), axis=1) / np.diff(rec.time)
     assert speed[: int(0.4 / np.diff(rec.time).mean())].max() < 0.1  # standing at first
     assert rec.time[-1] > 0.6 * clip.num_frames / clip.fps  # most of the take is kept
+
+
+def test_lost_controllers_are_untracked_in_their_windows_only() -> None:
+    rec = read_recording(SAMPLE)
+    rec = type(rec)(rec.time, rec.poses, np.ones_like(rec.tracked))
+    lost = lose_controllers(rec, 0.25)
+    t = rec.time - rec.time[0]
+    assert lost.tracked[:, 0].all()  # the headset is kept
+    left, right = ~lost.tracked[:, 1], ~lost.tracked[:, 2]
+    assert left[(t >= 2.0) & (t < 2.2)].all() and not left[t < 2.0].any()
+    assert right[(t >= 3.5) & (t < 3.7)].all() and not right[t < 3.5].any()
+    assert left[(t >= 5.0) & (t < 5.2)].all() and not left[(t > 2.3) & (t < 4.9)].any()
+    np.testing.assert_array_equal(lost.poses, rec.poses)  # poses kept; play holds them
