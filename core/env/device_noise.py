@@ -49,6 +49,9 @@ class DeviceNoise:
         # it stays lost (-1: tracked)
         self.lost_from = torch.full((num_envs, len(self.CONTROLLERS)), -1, dtype=torch.long)
         self.lost_to = torch.full_like(self.lost_from, -1)
+        # the frame each environment last drew at: a step that reads its devices twice (once
+        # more after resets) draws once, so ``lost`` stays a chance per second
+        self.drawn_at = torch.full((num_envs,), -1, dtype=torch.long)
         self.redraw(torch.arange(num_envs))
 
     def redraw(self, env_ids: torch.Tensor) -> None:
@@ -61,6 +64,7 @@ class DeviceNoise:
         self.scale[env_ids] = 1.0 + u[1] * self.options.scale
         self.lost_from[env_ids] = -1
         self.lost_to[env_ids] = -1
+        self.drawn_at[env_ids] = -1
 
     def hold(self, devices: torch.Tensor, frame: torch.Tensor, window: Sequence[int],
              pose_at: Callable[[torch.Tensor], torch.Tensor]) -> torch.Tensor:  # fmt: skip
@@ -76,7 +80,9 @@ class DeviceNoise:
                                          | (frame[:, None] < self.lost_from))  # fmt: skip
         self.lost_from[ended] = -1
         u = torch.rand(2, n, k, generator=self.generator)
-        start = (self.lost_from < 0) & (u[0] < self.options.lost * self.control_dt)
+        fresh = (frame != self.drawn_at)[:, None]
+        self.drawn_at = frame.clone()
+        start = fresh & (self.lost_from < 0) & (u[0] < self.options.lost * self.control_dt)
         length = (u[1] * self.options.lost_seconds / self.control_dt).long()
         frames = frame[:, None].expand(n, k)
         self.lost_from = torch.where(start, frames, self.lost_from)
@@ -109,6 +115,7 @@ class DeviceNoise:
             "scale": self.scale.clone(),
             "lost_from": self.lost_from.clone(),
             "lost_to": self.lost_to.clone(),
+            "drawn_at": self.drawn_at.clone(),
             "generator": self.generator.get_state(),
         }
 
@@ -123,4 +130,5 @@ class DeviceNoise:
         if "lost_from" in state:  # states saved before losses of tracking existed have none
             self.lost_from = state["lost_from"].clone()
             self.lost_to = state["lost_to"].clone()
+            self.drawn_at = state["drawn_at"].clone()
         self.generator.set_state(state["generator"])

@@ -111,6 +111,11 @@ def test_lost_controllers_are_held_at_the_frame_they_were_lost() -> None:
                 assert torch.equal(held[:, w_i, d, 0], expect)
             seen_lost += int((lost >= 0).sum())
     assert seen_lost > 0
+    # the same frame read twice (a step with resets) draws no new loss
+    before = noise.lost_from.clone()
+    for _ in range(5):  # at a third of a chance per step, five fresh frames would start some
+        noise.hold(devices, frame, window, _poses_by_frame)
+    assert torch.equal(noise.lost_from, before)
     # a loss ends: past its last frame the controller follows again
     later = torch.full((64,), 10 + 30 + 31)
     noise.options = DeviceNoiseOptions(height=0.0, scale=0.0, lost=1e-9)
