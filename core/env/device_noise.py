@@ -33,7 +33,8 @@ from retarget.settings.env import DeviceNoiseOptions
 
 
 class DeviceNoise:
-    """Per-environment offset and scale of device heights, redrawn at every reset."""
+    """Per-environment offset and scale of device heights, redrawn at every reset, and
+    per-controller losses of tracking (the pose held), drawn once per frame."""
 
     CONTROLLERS = (1, 2)  # device order: headset, left, right; the headset is not lost
 
