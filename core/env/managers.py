@@ -19,6 +19,8 @@ class RewardManager:
         self.names = list(self.terms)
         self.weights = torch.tensor([t.config.weight for t in self.terms.values()])
         self.episode_sums = torch.zeros(num_envs, len(self.terms))
+        self._value_sums = torch.zeros(len(self.terms), dtype=torch.float64)
+        self._value_count = 0
 
     def compute(self, ctx: StepContext, valid: torch.Tensor | None = None) -> torch.Tensor:
         """Weighted reward of the step, added into the per-term episode sums.
@@ -55,9 +57,19 @@ class RewardManager:
                     plugin=f"reward {self.terms[self.names[i]].name}",
                     field=f"rewards.{self.names[i]}",
                 )
+        self._value_sums += torch.where(finite, values, 0.0).sum(dim=0).double()
+        self._value_count += values.shape[0]
         weighted = values * self.weights
         self.episode_sums += weighted
         return weighted.sum(dim=1)
+
+    def mean_values(self) -> dict[str, float]:
+        """Each term's unweighted value averaged over every environment step computed so far
+        (empty before the first step): how far into its kernel a term sits."""
+        if not self._value_count:
+            return {}
+        means = self._value_sums / self._value_count
+        return {name: float(v) for name, v in zip(self.names, means, strict=True)}
 
     def pop_episodes(self, env_ids: torch.Tensor) -> dict[str, float]:
         """Mean per-term episode sums of the finished ``env_ids``, then zero them."""

@@ -49,6 +49,10 @@ class Algorithm(Plugin[ConfigT]):
     """
 
     kind: ClassVar[str] = "algorithm"
+    learns_from_reward: ClassVar[bool] = True
+    """Whether the environment's reward drives learning (reinforcement learning); a learner
+    that imitates a teacher, an expert or poses sets False, and the trainer then does not
+    judge the recipe's reward terms for it."""
     comm: Comm = SINGLE
     """The ranks of this run (:mod:`retarget.train.distributed`), set before :meth:`setup`;
     one process without torchrun."""

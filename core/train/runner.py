@@ -39,6 +39,7 @@ from retarget.train.checkpoint import load_checkpoint, save_checkpoint
 from retarget.train.distributed import SINGLE, Comm
 from retarget.train.logger import MetricsLogger
 from retarget.train.run_dir import CHECKPOINTS, RunLock
+from retarget.train.silent_terms import CHECK_AFTER_ITERATIONS, silent_kernels
 
 
 class CallbackWarning(UserWarning):
@@ -257,6 +258,17 @@ class Trainer:
                 "with a lower learning rate, or check the reward terms",
             )
 
+    def _report_silent_terms(self) -> None:
+        """Name, once per process, the reward kernels that averaged about zero so far: a
+        reinforcement learner gets no gradient from them (:mod:`retarget.train.silent_terms`)."""
+        manager = getattr(self.env, "rewards", None)
+        if manager is None or not self.algorithm.learns_from_reward or not self.comm.main:
+            return
+        lines = silent_kernels(manager.terms, manager.mean_values())
+        if lines:
+            print("reward terms that give no learning signal here:\n  " + "\n  ".join(lines),
+                  file=sys.stderr, flush=True)
+
     def train(self, budget: Budget, on_iteration: Callable[[Progress], None] | None = None) -> Path:
         """Run until the budget is spent or a stop is requested; returns the last checkpoint."""
         self.stop_reason = "budget"
@@ -272,6 +284,7 @@ class Trainer:
             if self.env.device_noise is not None:  # training alone sees the devices' noise
                 self.env.device_noise.active = True
             start = time.perf_counter() - self.progress.elapsed
+            first_iteration = self.progress.iteration
             while not self.comm.any(budget.done(self.progress.env_steps, self.progress.elapsed)):
                 before = self.env.total_steps
                 ends_before = self.env.termination_counts
@@ -289,6 +302,8 @@ class Trainer:
                 stats.update(self._termination_shares(ends_before))
                 p = self.progress
                 p.iteration += 1
+                if p.iteration - first_iteration == CHECK_AFTER_ITERATIONS:
+                    self._report_silent_terms()
                 stepped = self.env.total_steps - before
                 # an algorithm that learns from the library without stepping (a pose
                 # estimator) reports the samples it used instead

@@ -56,6 +56,7 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
     """
 
     name = "dagger"
+    learns_from_reward = False
 
     def __init__(
         self,

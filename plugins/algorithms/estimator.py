@@ -67,6 +67,7 @@ class Estimator(Algorithm[EstimatorConfig]):
     """
 
     name = "estimator"
+    learns_from_reward = False
 
     @classmethod
     def example(cls) -> Estimator:

@@ -35,6 +35,7 @@ class ExpertBC(LearnerAlgorithm[ExpertBCConfig]):
     """A student learns a tracking expert's actions on the expert's replayed states."""
 
     name = "expert_bc"
+    learns_from_reward = False
 
     def __init__(self, config: ExpertBCConfig | None = None, windows: Any = None) -> None:
         """``windows``: replay these ``ExpertWindows`` instead of the configured directory
