@@ -194,7 +194,7 @@ def test_a_run_locked_before_motions_level_feet_keeps_its_tilted_feet(tmp_path: 
 
     registry = load_plugins()
     run = tmp_path / "old"
-    shutil.copytree(pretrained.model_dir("dino-teacher"), run)
+    shutil.copytree(pretrained.model_dir("dino-hmd-student"), run)
     text = (run / "recipe.lock.yaml").read_text()
     assert "level_feet" not in yaml.safe_load(text)["motions"]
     assert locked_recipe(run, registry)[0].recipe.motions.level_feet is False
