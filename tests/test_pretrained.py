@@ -158,24 +158,35 @@ def test_follow_summary_names_when_the_headset_was_lost() -> None:
     assert "lost it at 1.0 s" in lost and "60 cm max" in lost
 
 
+def _lock_without(run: Path, section: str, field: str) -> Path:
+    """A copy of a shipped model whose lock lacks ``section.field``, as locks written before
+    the field existed do (whatever the shipped locks now say)."""
+    import shutil
+
+    import yaml
+
+    shutil.copytree(pretrained.model_dir("human-teacher"), run)
+    path = run / "recipe.lock.yaml"
+    lock = yaml.safe_load(path.read_text())
+    lock[section].pop(field, None)
+    path.write_text(yaml.safe_dump(lock, sort_keys=False))
+    return run
+
+
 def test_a_run_locked_before_env_devices_keeps_the_performers_size(tmp_path: Path) -> None:
     """A lock without ``env.devices`` (written before the field) reads as ``person``, what its
     devices were when it trained; a new recipe without it gets ``character``."""
-    import shutil
-
     import yaml
 
     from retarget.recipe import load
     from retarget.train.load import locked_recipe
 
     registry = load_plugins()
-    run = tmp_path / "old"
-    shutil.copytree(pretrained.model_dir("dino-hmd-student"), run)
-    text = (run / "recipe.lock.yaml").read_text()
-    assert "devices" not in yaml.safe_load(text)["env"]
+    run = _lock_without(tmp_path / "old", "env", "devices")
     assert locked_recipe(run, registry)[0].recipe.env.devices == "person"
-    new = text.replace("\nenv:\n", "\nenv:\n  devices: character\n")
-    (run / "recipe.lock.yaml").write_text(new)
+    lock = yaml.safe_load((run / "recipe.lock.yaml").read_text())
+    lock["env"]["devices"] = "character"
+    (run / "recipe.lock.yaml").write_text(yaml.safe_dump(lock, sort_keys=False))
     assert locked_recipe(run, registry)[0].recipe.env.devices == "character"
     fresh = tmp_path / "fresh.yaml"
     fresh.write_text("extends: null\ncharacter: human\nsensors: [three_point]\n")
@@ -185,18 +196,11 @@ def test_a_run_locked_before_env_devices_keeps_the_performers_size(tmp_path: Pat
 def test_a_run_locked_before_motions_level_feet_keeps_its_tilted_feet(tmp_path: Path) -> None:
     """A lock without ``motions.level_feet`` reads as ``false``: its policy was trained on
     the file's foot tilt; a new recipe levels the feet."""
-    import shutil
-
-    import yaml
-
     from retarget.recipe import load
     from retarget.train.load import locked_recipe
 
     registry = load_plugins()
-    run = tmp_path / "old"
-    shutil.copytree(pretrained.model_dir("dino-hmd-student"), run)
-    text = (run / "recipe.lock.yaml").read_text()
-    assert "level_feet" not in yaml.safe_load(text)["motions"]
+    run = _lock_without(tmp_path / "old", "motions", "level_feet")
     assert locked_recipe(run, registry)[0].recipe.motions.level_feet is False
     fresh = tmp_path / "fresh.yaml"
     fresh.write_text("extends: null\ncharacter: human\nsensors: [three_point]\n")
