@@ -44,20 +44,26 @@ def last_row(run: Path) -> dict[str, str]:
 
 def keep_state(run: Path, name: str, teacher: str | None = None) -> Path:
     """The run's full training state under ``benchmarks/pretrain/NAME`` (newest checkpoint);
-    a student's lock names its teacher as the shipped model, so it resumes from any checkout."""
+    a student's lock names its teacher as the shipped model, so it resumes from any checkout.
+    A state trained on in place keeps its files and loses only its older checkpoints."""
     out = HERE / "pretrain" / name
-    if out.exists():
-        shutil.rmtree(out)
-    (out / CHECKPOINTS).mkdir(parents=True)
-    for f in (LOCK, "metrics.csv", "train_settings.json"):
-        if (run / f).exists():
-            shutil.copy2(run / f, out / f)
+    ckpt = latest_checkpoint(run)
+    if out.resolve() == run.resolve():  # trained on in place (`--resume` of the kept state)
+        for old in (out / CHECKPOINTS).glob("*.pt"):
+            if old.name != ckpt.name:
+                old.unlink()
+    else:
+        if out.exists():
+            shutil.rmtree(out)
+        (out / CHECKPOINTS).mkdir(parents=True)
+        for f in (LOCK, "metrics.csv", "train_settings.json"):
+            if (run / f).exists():
+                shutil.copy2(run / f, out / f)
+        shutil.copy2(ckpt, out / CHECKPOINTS / ckpt.name)
     if teacher is not None:
         lock = yaml.safe_load((out / LOCK).read_text())
         lock["algorithm"]["teacher"] = teacher
         (out / LOCK).write_text(yaml.safe_dump(lock, sort_keys=False))
-    ckpt = latest_checkpoint(run)
-    shutil.copy2(ckpt, out / CHECKPOINTS / ckpt.name)
     return out
 
 

@@ -1,0 +1,48 @@
+"""``benchmarks/ship_models.py``'s kept training state: README's flow resumes a kept state in
+place and ships it again, so keeping it must not delete what it is copying."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
+
+import ship_models
+
+
+def _state(folder: Path, iterations: tuple[int, ...]) -> Path:
+    (folder / "checkpoints").mkdir(parents=True)
+    (folder / "recipe.lock.yaml").write_text("algorithm: {type: dagger, teacher: runs/t}\n")
+    (folder / "metrics.csv").write_text("step,elapsed_s\n8192,10\n")
+    (folder / "train_settings.json").write_text("{}")
+    for i in iterations:
+        (folder / "checkpoints" / f"ckpt-{i:07d}.pt").write_bytes(bytes([i % 256]) * 8)
+    return folder
+
+
+@pytest.fixture
+def here(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    monkeypatch.setattr(ship_models, "HERE", tmp_path)
+    return tmp_path
+
+
+def test_a_state_resumed_in_place_keeps_its_files_and_its_newest_checkpoint(here: Path) -> None:
+    kept = _state(here / "pretrain" / "m", (10, 20, 30))
+    out = ship_models.keep_state(kept, "m", teacher="pretrained:t")
+    assert out == kept
+    assert [p.name for p in (out / "checkpoints").iterdir()] == ["ckpt-0000030.pt"]
+    assert (out / "checkpoints" / "ckpt-0000030.pt").read_bytes() == bytes([30]) * 8
+    assert (out / "metrics.csv").read_text().startswith("step")
+    assert "pretrained:t" in (out / "recipe.lock.yaml").read_text()
+
+
+def test_another_run_replaces_the_kept_state(here: Path) -> None:
+    _state(here / "pretrain" / "m", (5,))
+    run = _state(here / "runs" / "r", (40, 50))
+    out = ship_models.keep_state(run, "m")
+    assert sorted(p.name for p in (out / "checkpoints").iterdir()) == ["ckpt-0000050.pt"]
+    assert "runs/t" in (out / "recipe.lock.yaml").read_text()
+    assert len(list((run / "checkpoints").iterdir())) == 2  # the source is untouched
