@@ -24,7 +24,7 @@ from pathlib import Path
 
 import yaml
 
-from retarget.pretrained import ModelCard
+from retarget.pretrained import MODELS, ModelCard
 from retarget.train.package_model import package
 from retarget.train.run_dir import CHECKPOINTS, LOCK, latest_checkpoint, resolve_run
 
@@ -65,6 +65,22 @@ def keep_state(run: Path, name: str, teacher: str | None = None) -> Path:
         lock["algorithm"]["teacher"] = teacher
         (out / LOCK).write_text(yaml.safe_dump(lock, sort_keys=False))
     return out
+
+
+def students_checkpoints(name: str, models: Path = MODELS) -> dict[str, bytes]:
+    """The checkpoints of shipped model ``name`` that other shipped models' locks distil from
+    (``algorithm.teacher_checkpoint``), read before ``name`` is packaged again (packaging
+    replaces its folder) so that each student keeps the teacher file it names."""
+    kept: dict[str, bytes] = {}
+    for lock_path in sorted(models.glob(f"*/{LOCK}")):
+        algorithm = yaml.safe_load(lock_path.read_text()).get("algorithm")
+        if not isinstance(algorithm, dict) or algorithm.get("teacher") != f"pretrained:{name}":
+            continue
+        rel = algorithm.get("teacher_checkpoint")
+        path = models / name / str(rel)
+        if rel and path.is_file() and path.parent == models / name / CHECKPOINTS:
+            kept[path.name] = path.read_bytes()
+    return kept
 
 
 def main() -> int:
@@ -126,7 +142,13 @@ def main() -> int:
         teacher=f"pretrained:{args.teacher}" if args.teacher else None, metrics=metrics,
         notes=args.notes,
     )  # fmt: skip
-    print(package(run, card, teacher=card.teacher))
+    teacher_files = students_checkpoints(args.name)
+    out = package(run, card, teacher=card.teacher)
+    for file_name, data in teacher_files.items():
+        if not (out / CHECKPOINTS / file_name).exists():
+            (out / CHECKPOINTS / file_name).write_bytes(data)
+            print(f"kept {CHECKPOINTS}/{file_name}: a shipped student distils from it")
+    print(out)
     if not args.no_state:
         print(keep_state(run, args.name, card.teacher))
     return 0

@@ -46,3 +46,20 @@ def test_another_run_replaces_the_kept_state(here: Path) -> None:
     assert sorted(p.name for p in (out / "checkpoints").iterdir()) == ["ckpt-0000050.pt"]
     assert "runs/t" in (out / "recipe.lock.yaml").read_text()
     assert len(list((run / "checkpoints").iterdir())) == 2  # the source is untouched
+
+
+def test_a_students_teacher_checkpoint_is_found_for_keeping(tmp_path: Path) -> None:
+    """Shipping a teacher again replaces its folder; the checkpoint a shipped student's lock
+    names is read first so that it can be written back."""
+    teacher = tmp_path / "t" / "checkpoints"
+    teacher.mkdir(parents=True)
+    (teacher / "ckpt-0000100.pt").write_bytes(b"old")
+    (teacher / "ckpt-0000200.pt").write_bytes(b"new")
+    (tmp_path / "t" / "recipe.lock.yaml").write_text("algorithm: {type: ppo}\n")
+    for name, ckpt in (("s", "checkpoints/ckpt-0000100.pt"), ("u", "../../escape.pt")):
+        (tmp_path / name).mkdir()
+        (tmp_path / name / "recipe.lock.yaml").write_text(
+            f"algorithm: {{type: dagger, teacher: 'pretrained:t', teacher_checkpoint: '{ckpt}'}}\n"
+        )
+    assert ship_models.students_checkpoints("t", tmp_path) == {"ckpt-0000100.pt": b"old"}
+    assert ship_models.students_checkpoints("s", tmp_path) == {}
