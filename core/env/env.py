@@ -41,10 +41,12 @@ from retarget.env.observations import Privileged, Proprio
 from retarget.env.reference import CharacterReference
 from retarget.env.root_assist import RootAssist
 from retarget.errors import PluginError
+from retarget.geometry import rotations as rot
 from retarget.kinds import Character, Observer, RewardTerm, Scene, Sensor, Termination
 from retarget.kinds.state import ReferenceBatch, StepContext
 from retarget.kinds.step import StepNeeds, StepPlugin
 from retarget.motion.clip import MotionClip
+from retarget.motion.devices import device_poses
 from retarget.motion.library import MotionLibrary
 from retarget.motion.resample import resample
 from retarget.scene.ground import Ground
@@ -96,6 +98,7 @@ class RetargetEnv:
         self._mocap_ids = self._scene_mocap_ids()
         self.reference = CharacterReference(character, self.world.model, layout, clips,
                                             mocap=self._clip_placements(len(clips)))  # fmt: skip
+        self._headset_mount: torch.Tensor | None = None
         self.idle_starts = None
         if opts.idle_starts > 0:
             self.idle_starts = IdleStarts(opts.idle_starts, self.library.from_rest,
@@ -227,14 +230,41 @@ class RetargetEnv:
     def idle_qpos(self, hz: float) -> np.ndarray:
         """The character's idle standing pose: where ``retarget serve`` and ``play --input``
         start (the same frame of the same generated idle clip, retargeted as the library)."""
+        ref, _, frame = self._idle_reference(hz)
+        return ref.qpos64[frame].copy()
+
+    @property
+    def headset_mount(self) -> torch.Tensor:
+        """Where the headset sits on this character, ``(3,)`` metres in its ``head`` site's
+        frame: measured on the idle pose against the headset the idle clip gives (the
+        calibrated start of ``play --input`` and ``serve``).
+
+        A human's head site is the headset mount (a few millimetres off), but a character
+        shaped unlike the person is not: the Dino's head stands 0.6 m from the headset of the
+        person it is retargeted from. SimXR's rule (head farther than 0.5 m from the headset)
+        reads the gap from this point on the head instead, so a Dino standing still under
+        its calibrated headset is not counted as lost."""
+        if self._headset_mount is None:
+            ref, clip, frame = self._idle_reference(self.library.fps)
+            head = self.layout.site("head")
+            headset = device_poses(clip.global_pos[frame], clip.global_rot[frame], clip.height)
+            pos = ref.arrays["site_pos"][frame, head].double().numpy()
+            quat = ref.arrays["site_quat"][frame, head].double().numpy()
+            local = rot.apply(rot.conj(quat), headset[0, :3] - pos)
+            self._headset_mount = torch.as_tensor(local, dtype=torch.float32)
+        return self._headset_mount
+
+    def _idle_reference(self, hz: float) -> tuple[CharacterReference, MotionClip, int]:
+        """The generated idle clip at ``hz`` (scaled like the library's clips), its reference
+        on this character, and the frame live sessions start at."""
         from retarget.motion.procedural import idle_clip
 
         idle = idle_clip(1.0)
         if self.options.devices == "character":
             idle = scaled_clip(idle, root_height_ratio(self.character.build_spec().compile(), idle))
-        ref = CharacterReference(self.character, self.world.model, self.layout,
-                                 [resample(idle, hz)])  # fmt: skip
-        return ref.qpos64[min(2, len(ref.qpos64) - 1)].copy()
+        idle = resample(idle, hz)
+        ref = CharacterReference(self.character, self.world.model, self.layout, [idle])
+        return ref, idle, min(2, len(ref.qpos64) - 1)
 
     def _default_groups(self) -> dict[str, list[str]]:
         actor = [s.name for s in self.sensors] + ["proprio"] + [o.name for o in self.observers]

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import torch
 
-from retarget.geometry.heading import rotation_distance
+from retarget.geometry.heading import quat_apply, rotation_distance
 from retarget.kinds.state import Layout, StepContext
 from retarget.scene.contacts import CONTACT_LINKS
 from retarget.scene.contacts import CONTACT_NEWTONS as LINK_NEWTONS
@@ -46,11 +46,19 @@ def procrustes_error(pred: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
     return (aligned - target).norm(dim=-1).mean(-1)
 
 
-def head_to_headset(ctx: StepContext, head: int) -> torch.Tensor:
-    """Distance from each environment's simulated head site to the headset it was given at
-    this frame, metres ``(N,)`` (SimXR's failure rule reads it against 0.5 m)."""
+def head_to_headset(
+    ctx: StepContext, head: int, mount: torch.Tensor | None = None
+) -> torch.Tensor:
+    """Distance from each environment's simulated headset mount to the headset it was given
+    at this frame, metres ``(N,)`` (SimXR's failure rule reads it against 0.5 m).
+
+    ``mount`` is where the headset sits in the ``head`` site's frame
+    (:attr:`RetargetEnv.headset_mount`, ``(3,)``); None: at the head site itself."""
     headset = ctx.ref.devices[:, ctx.ref.window_offsets.index(0), 0, :3]
-    return (ctx.sim.site_pos[:, head] - headset).norm(dim=-1)
+    worn = ctx.sim.site_pos[:, head]
+    if mount is not None:
+        worn = worn + quat_apply(ctx.sim.site_quat[:, head], mount.to(worn.dtype).expand_as(worn))
+    return (worn - headset).norm(dim=-1)
 
 
 def hands_to_controllers(ctx: StepContext, hands: list[int]) -> torch.Tensor:
@@ -91,8 +99,10 @@ class StepMetrics:
 class MetricProbe:
     """Resolves indices once, then computes :class:`StepMetrics` from step contexts."""
 
-    def __init__(self, layout: Layout) -> None:
+    def __init__(self, layout: Layout, headset_mount: torch.Tensor | None = None) -> None:
+        """``headset_mount``: where the headset sits on the head (:func:`head_to_headset`)."""
         self.head = layout.site("head")
+        self.headset_mount = headset_mount
         self.hands = [layout.site("left_hand"), layout.site("right_hand")]
         groups = layout.body_groups
         sides = ("left_foot", "right_foot")
@@ -120,7 +130,7 @@ class MetricProbe:
         hmd_rot = rotation_distance(r.site_quat[:, self.head], s.site_quat[:, self.head])
         ctrl = (s.site_pos[:, self.hands] - r.site_pos[:, self.hands]).norm(dim=-1)
         device_mean = (hmd + ctrl.sum(-1)) / 3.0
-        head_gap = head_to_headset(ctx, self.head)
+        head_gap = head_to_headset(ctx, self.head, self.headset_mount)
         force = s.contact_force
         if self.sides is not None and ctx.ref.contacts.shape[1] == 2:
             sim_contact = torch.stack(

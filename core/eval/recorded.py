@@ -101,7 +101,7 @@ def follow(
 
     env = drive.loaded.env
     act = policy or require(drive.loaded.algorithm, Acting).act
-    head = env.layout.site("head")
+    head, mount = env.layout.site("head"), env.headset_mount
     n = env.num_envs
     obs = env.place(torch.arange(n), torch.full((n,), drive.lead))
     steps = max(drive.lengths) - 1
@@ -109,7 +109,7 @@ def follow(
     with torch.no_grad():
         for t in range(steps):
             obs, *_ = env.step(act(obs))
-            gaps[:, t] = head_to_headset(env.last_context, head).numpy()
+            gaps[:, t] = head_to_headset(env.last_context, head, mount).numpy()
             if on_step is not None:
                 on_step(t)
     return [gaps[k, : length - 1] for k, length in enumerate(drive.lengths)]

@@ -73,7 +73,7 @@ def evaluate(
     """
     cfg = settings or EvalSettings()
     env.gather(StepNeeds(scene_contacts=True))  # the scene contact agreement reads them
-    probe = MetricProbe(env.layout)
+    probe = MetricProbe(env.layout, env.headset_mount)
     has_joints = probe.joints is not None
     every = [
         *standard_terms(env, has_joints=has_joints, head_distance=cfg.head_distance, fall=fall,

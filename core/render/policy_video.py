@@ -83,7 +83,9 @@ def render_rollout(
                 observed.append(obs[group][0].float().numpy().copy())
             obs, *_ = env.step(policy(obs))
             if head_gap is not None and env.last_context is not None:
-                head_gap.append(float(head_to_headset(env.last_context, head)[0]))
+                head_gap.append(
+                    float(head_to_headset(env.last_context, head, env.headset_mount)[0])
+                )
             row = int(lib.rows(env.clip[:1], env.frame[:1])[0, 0])
             copy_env_pose(env, 0, data)
             cam.lookat[:] = [data.qpos[0], data.qpos[1], 0.5 * top]

@@ -45,6 +45,24 @@ def test_each_environment_plays_its_own_recording_as_it_would_alone() -> None:
     np.testing.assert_allclose(gaps[1], alone, atol=1e-4)  # a batch changes nothing
 
 
+def test_a_character_shaped_unlike_the_person_starts_under_its_headset() -> None:
+    """The Dino's head stands 0.6 m from the calibrated headset of the person driving it; the
+    gap is read from where the headset sits on its head (``env.headset_mount``), so standing
+    still at the start is not losing the headset."""
+    rec = _shorter(read_recording(SAMPLE), 0.3)
+    drive = drive_recordings("pretrained:dino-hmd-student", REGISTRY, [rec])
+    env = drive.loaded.env
+    assert float(env.headset_mount.norm()) > 0.4
+    head = env.layout.site("head")
+    first = int(drive.rows[0][0])
+    standing = env.reference.arrays["site_pos"][first, head]
+    assert float((standing - env.library.devices[first, 0, :3]).norm()) > 0.4  # the old rule
+    gaps = follow(drive)[0]
+    assert gaps[0] < 0.15 and follow_figures(gaps, 30.0)["followed"] == 1.0
+    human = drive_recordings(RUN, REGISTRY, [rec]).loaded.env.headset_mount
+    assert float(human.norm()) < 0.1  # a human's head site is its headset mount
+
+
 def test_a_height_offset_moves_every_device_up() -> None:
     rec = _shorter(read_recording(SAMPLE), 0.5)
     plain = drive_recordings(RUN, REGISTRY, [rec])
