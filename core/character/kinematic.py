@@ -147,7 +147,7 @@ def _body_ids(model: mujoco.MjModel, names: Sequence[str]) -> list[int]:
     return [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names]
 
 
-def _lowest_points(
+def geoms_lowest_point(
     model: mujoco.MjModel, xpos: np.ndarray, xmat: np.ndarray, geoms: Sequence[int]
 ) -> np.ndarray:
     """Lowest world z over ``geoms`` per frame, from per-frame geom poses ``(T, G, ...)``."""
@@ -195,9 +195,12 @@ def foot_artefacts(
     ``feet`` maps ``left_foot``/``right_foot`` to body names (a character's body groups).
     """
     import mujoco
+
+    from retarget.character.grounding import foot_geoms
+
     data = mujoco.MjData(model)
     sides = [_body_ids(model, feet["left_foot"]), _body_ids(model, feet["right_foot"])]
-    geoms = [[g for g in range(model.ngeom) if model.geom_bodyid[g] in ids] for ids in sides]
+    geoms = foot_geoms(model, sides)
     all_geoms = geoms[0] + geoms[1]
     t = motion.qpos.shape[0]
     xpos = np.empty((t, len(all_geoms), 3))
@@ -213,8 +216,8 @@ def foot_artefacts(
     n0 = len(geoms[0])
     low = np.stack(
         [
-            _lowest_points(model, xpos[:, :n0], xmat[:, :n0], geoms[0]),
-            _lowest_points(model, xpos[:, n0:], xmat[:, n0:], geoms[1]),
+            geoms_lowest_point(model, xpos[:, :n0], xmat[:, :n0], geoms[0]),
+            geoms_lowest_point(model, xpos[:, n0:], xmat[:, n0:], geoms[1]),
         ],
         axis=1,
     )

@@ -18,6 +18,7 @@ import mujoco
 import numpy as np
 import torch
 
+from retarget.character.grounding import ground_feet
 from retarget.character.kinematic import retarget_clip
 from retarget.env.reference_cache import load_reference, reference_key, store_reference
 from retarget.errors import PluginError
@@ -52,19 +53,23 @@ class CharacterReference:
         clips: Sequence[MotionClip],
         contact_margin: float = DEFAULT_MARGIN,
         mocap: Sequence[tuple[np.ndarray, np.ndarray] | None] | None = None,
+        ground: bool = False,
     ) -> None:
         """``mocap``: per clip, every mocap body's position and quaternion while its scene
-        contacts are labelled (None: the compiled placement)."""
+        contacts are labelled (None: the compiled placement). ``ground``: the root height
+        corrected so the performer's stance feet stand on the floor
+        (:func:`retarget.character.grounding.ground_feet`)."""
         joint_map = character.joint_map()
         if joint_map is None:
             raise PluginError(
                 "has no joint map, so human motion cannot be retargeted onto it",
                 plugin=f"character {character.name}",
             )
-        key = reference_key(model, joint_map, clips, contact_margin, mocap)
+        key = reference_key(model, joint_map, clips, contact_margin, mocap, ground)
         cached = load_reference(key)
         if cached is None:
-            cached = _compute(model, layout, joint_map, clips, contact_margin, mocap)
+            feet = foot_bodies(layout, character.name) if ground else None
+            cached = _compute(model, layout, joint_map, clips, contact_margin, mocap, feet)
             store_reference(key, cached)
         qpos, qvel, labels = cached.pop("qpos"), cached.pop("qvel"), cached.pop("labels")
         self._torque = cached.pop("joint_torque")
@@ -122,6 +127,20 @@ class CharacterReference:
         )
 
 
+def foot_bodies(layout: Layout, character: str) -> list[list[int]]:
+    """Model body ids of the left and right foot (the ``left_foot``/``right_foot`` groups)."""
+    groups = layout.body_groups
+    missing = [g for g in ("left_foot", "right_foot") if g not in groups]
+    if missing:
+        raise PluginError(
+            f"has no body group {' or '.join(missing)}, so its stance feet cannot be put on "
+            "the floor (env.ground_feet)",
+            plugin=f"character {character}",
+        )
+    ids = np.asarray(layout.body_ids)
+    return [ids[list(groups[g])].tolist() for g in ("left_foot", "right_foot")]
+
+
 def _actuator_dofs(model: mujoco.MjModel) -> np.ndarray:
     """``(nu,)``: the degree of freedom each actuator drives when it drives one hinge or
     slide joint, else -1."""
@@ -139,20 +158,23 @@ def _compute(
     clips: Sequence[MotionClip],
     contact_margin: float,
     mocap: Sequence[tuple[np.ndarray, np.ndarray] | None] | None,
+    feet: list[list[int]] | None = None,
 ) -> dict[str, np.ndarray]:
-    """Retargeting, velocities, joint torques, forward kinematics and contact labels of
-    every frame."""
+    """Retargeting (its stance ``feet`` put on the floor when given), velocities, joint
+    torques, forward kinematics and contact labels of every frame."""
     qpos_parts, qvel_parts, torque_parts = [], [], []
     dofs = _actuator_dofs(model)
     joints = np.asarray(model.actuator_trnid[:, 0], dtype=np.intp)[dofs >= 0]
     for clip in clips:
-        motion = retarget_clip(clip, model, joint_map)
-        qpos_parts.append(motion.qpos)
-        qvel_parts.append(_velocities(model, motion.qpos, clip.fps))
-        torque = np.zeros((len(motion.qpos), model.nu))
+        qpos_clip = retarget_clip(clip, model, joint_map).qpos
+        if feet is not None:
+            qpos_clip = ground_feet(model, qpos_clip, clip.contacts, feet, clip.fps)
+        qpos_parts.append(qpos_clip)
+        qvel_parts.append(_velocities(model, qpos_clip, clip.fps))
+        torque = np.zeros((len(qpos_clip), model.nu))
         # the load of a stance foot comes through the floor (the scene at its compiled
         # placement): shared out over the reference pose's contacts
-        torque[:, dofs >= 0] = reference_torques(model, motion.qpos, qvel_parts[-1],
+        torque[:, dofs >= 0] = reference_torques(model, qpos_clip, qvel_parts[-1],
                                                  1.0 / clip.fps, joints, support=True)  # fmt: skip
         torque_parts.append(torque)
     qpos = np.concatenate(qpos_parts)

@@ -37,11 +37,18 @@ def reference_key(
     clips: Sequence[MotionClip],
     margin: float,
     mocap: Sequence[tuple[np.ndarray, np.ndarray] | None] | None,
+    ground: bool = False,
 ) -> str | None:
-    """Hash of everything the reference depends on, or None when it is not worth caching."""
+    """Hash of everything the reference depends on, or None when it is not worth caching.
+    (``ground`` adds the clips' foot contact labels, which grounding reads; keys without it
+    are those of references cached before it existed.)"""
     if sum(c.num_frames for c in clips) < MIN_FRAMES or clip_cache_dir() is None:
         return None
     h = hashlib.sha256(f"v{VERSION} {margin!r} ".encode())
+    if ground:
+        h.update(b"ground ")
+        for clip in clips:
+            h.update(np.ascontiguousarray(clip.contacts, dtype=bool).tobytes())
     buffer = np.zeros(mujoco.mj_sizeModel(model), dtype=np.uint8)
     mujoco.mj_saveModel(model, None, buffer)
     h.update(hashlib.sha256(buffer.tobytes()).digest())

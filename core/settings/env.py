@@ -101,6 +101,14 @@ class EnvOptions(BaseModel):
         description="training only: a root force/torque toward the reference, annealed to "
         "zero over anneal_steps (null: none); e.g. {strength: 1, anneal_steps: 3000000}",
     )
+    ground_feet: bool = Field(
+        False,
+        description="put the reference's stance feet on the floor: each frame's root height "
+        "corrected so the foot the performer has down touches the floor "
+        "(retarget.character.grounding); for characters whose legs are not proportioned like "
+        "a person's (the Dino's stance toes float 2-8 cm otherwise); false: the paper's rough "
+        "retargeting as it is",
+    )
     idle_starts: float = Field(
         0.0, ge=0.0, le=1.0,
         description="share of training episodes that start standing in the character's idle "
