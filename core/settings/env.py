@@ -106,7 +106,7 @@ class EnvOptions(BaseModel):
         description="put the reference's stance feet on the floor: each frame's root height "
         "corrected so the foot the performer has down touches the floor "
         "(retarget.character.grounding); for characters whose legs are not proportioned like "
-        "a person's (the Dino's stance toes float 2-8 cm otherwise); false: the paper's rough "
+        "a person's (the Dino's stance feet float 3-7 cm otherwise); false: the paper's rough "
         "retargeting as it is",
     )
     idle_starts: float = Field(
