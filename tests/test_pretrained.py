@@ -59,7 +59,7 @@ def shipped(models: Path, monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> Pa
 def test_a_packaged_run_is_small_and_listed(shipped: Path, capsys) -> None:
     folder = shipped / "tiny-teacher"
     names = sorted(p.name for p in folder.rglob("*") if p.is_file())
-    assert names == ["MODEL_CARD.md", "card.json", "ckpt-0000002.pt", "recipe.lock.yaml"]
+    assert names == ["CURRENT", "MODEL_CARD.md", "card.json", "ckpt-0000002.pt", "recipe.lock.yaml"]
     assert main(["pretrained"]) == 0 and "tiny-teacher" in capsys.readouterr().out
     assert main(["pretrained", "path", "tiny-teacher"]) == 0
     assert Path(capsys.readouterr().out.strip()) == folder

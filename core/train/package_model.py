@@ -17,7 +17,7 @@ import yaml
 
 from retarget.pretrained import CARD, MODELS, ModelCard
 from retarget.train.checkpoint import load_checkpoint, save_checkpoint
-from retarget.train.run_dir import CHECKPOINTS, LOCK, latest_checkpoint, resolve_run
+from retarget.train.run_dir import CHECKPOINTS, CURRENT, LOCK, latest_checkpoint, resolve_run
 
 TRAINING_ONLY = ("optimizer", "critic", "value_norm", "generator", "last_obs", "buffer",
                  "overlap", "episode_return", "episode_length", "finished_returns",
@@ -48,6 +48,8 @@ def package(run: str | Path, card: ModelCard, *, teacher: str | None = None,
     (out / LOCK).write_text(yaml.safe_dump(lock, sort_keys=False), encoding="utf-8")
     ckpt = latest_checkpoint(source)
     save_checkpoint(out / CHECKPOINTS / ckpt.name, policy_only(load_checkpoint(ckpt)))
+    # the model's own checkpoint by name: files kept beside it may carry higher numbers
+    (out / CHECKPOINTS / CURRENT).write_text(ckpt.name + "\n", encoding="utf-8")
     (out / CARD).write_text(card.model_dump_json(indent=2) + "\n", encoding="utf-8")
     (out / "MODEL_CARD.md").write_text(render(card), encoding="utf-8")
     return out

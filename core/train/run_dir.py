@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import datetime as dt
 import os
+import re
 import shutil
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
@@ -15,6 +16,11 @@ from retarget.errors import RetargetError
 
 CHECKPOINTS = "checkpoints"
 LOCK = "recipe.lock.yaml"
+CURRENT = "CURRENT"
+"""A file in ``checkpoints/`` naming the checkpoint that is the model, where the folder holds
+others too: a shipped teacher keeps the older checkpoints its shipped students distilled
+from, and a new training run numbers its checkpoints from 1 again, so the highest number is
+not the newest."""
 
 
 def new_run_dir(root: str | Path, name: str) -> Path:
@@ -93,7 +99,17 @@ def resolve_run(path: str | Path) -> Path:
 
 
 def latest_checkpoint(run: Path) -> Path:
-    """The newest checkpoint file of a run."""
+    """The newest checkpoint file of a run: the one ``checkpoints/CURRENT`` names when there
+    is one, else the highest numbered."""
+    marker = run / CHECKPOINTS / CURRENT
+    if marker.is_file():
+        name = marker.read_text(encoding="utf-8", errors="replace")[:64].strip()
+        if not re.fullmatch(r"ckpt-[0-9]+\.pt", name) or not (run / CHECKPOINTS / name).is_file():
+            raise RetargetError(
+                f"names {name!r}, which is no checkpoint file beside it",
+                file=str(marker),
+            )
+        return run / CHECKPOINTS / name
     files = sorted((run / CHECKPOINTS).glob("ckpt-*.pt"))
     if not files:
         raise RetargetError("run has no checkpoint yet", file=str(run / CHECKPOINTS))

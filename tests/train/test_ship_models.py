@@ -12,6 +12,8 @@ sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
 
 import ship_models
 
+from retarget.errors import RetargetError
+
 
 def _state(folder: Path, iterations: tuple[int, ...]) -> Path:
     (folder / "checkpoints").mkdir(parents=True)
@@ -63,3 +65,32 @@ def test_a_students_teacher_checkpoint_is_found_for_keeping(tmp_path: Path) -> N
         )
     assert ship_models.students_checkpoints("t", tmp_path) == {"ckpt-0000100.pt": b"old"}
     assert ship_models.students_checkpoints("s", tmp_path) == {}
+
+
+def test_a_shipped_teacher_is_its_new_checkpoint_beside_a_higher_numbered_kept_one(
+    tmp_path: Path,
+) -> None:
+    """A teacher continued in a new run numbers its checkpoints from 1 again; the older file
+    kept for its shipped students (ckpt 962) must not become the model (ckpt 362)."""
+    import torch
+
+    from retarget.pretrained import ModelCard
+    from retarget.train.checkpoint import save_checkpoint
+    from retarget.train.package_model import package
+    from retarget.train.run_dir import CHECKPOINTS, CURRENT, latest_checkpoint
+
+    run = tmp_path / "run"
+    (run / CHECKPOINTS).mkdir(parents=True)
+    (run / "recipe.lock.yaml").write_text("character: human\nalgorithm: {type: ppo}\n")
+    save_checkpoint(run / CHECKPOINTS / "ckpt-0000362.pt",
+                    {"algorithm": {"w": torch.ones(1)}, "progress": {}})  # fmt: skip
+    card = ModelCard(name="t", summary="s", character="human", sensors=[], algorithm="ppo",
+                     data="d", licence="l", env_steps=1, cpu_hours=0.1)  # fmt: skip
+    out = package(run, card, models=tmp_path / "models")
+    (out / CHECKPOINTS / "ckpt-0000962.pt").write_bytes(b"a student's teacher")
+    assert latest_checkpoint(out).name == "ckpt-0000362.pt"
+    (out / CHECKPOINTS / CURRENT).write_text("../../escape.pt")
+    with pytest.raises(RetargetError, match="no checkpoint file"):
+        latest_checkpoint(out)
+    (out / CHECKPOINTS / CURRENT).unlink()
+    assert latest_checkpoint(out).name == "ckpt-0000962.pt"  # a run without the marker
