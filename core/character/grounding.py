@@ -26,6 +26,10 @@ from collections.abc import Sequence
 import mujoco
 import numpy as np
 
+from retarget.character.kinematic import foot_geoms, geoms_lowest_point
+
+__all__ = ["SMOOTH_SECONDS", "foot_geoms", "ground_feet", "lowest_points"]
+
 SMOOTH_SECONDS = 0.2
 """Width of the moving average over the per-frame correction (seconds)."""
 
@@ -34,8 +38,6 @@ def lowest_points(model: mujoco.MjModel, qpos: np.ndarray, geoms: Sequence[int])
     """Lowest world height over ``geoms`` in each frame ``(T,)``, metres, from forward
     kinematics of ``qpos`` ``(T, nq)`` (the character's block; the rest of the model stays at
     its defaults)."""
-    from retarget.character.kinematic import geoms_lowest_point
-
     data = mujoco.MjData(model)
     ids = list(geoms)
     xpos = np.zeros((len(qpos), len(ids), 3))
@@ -46,12 +48,6 @@ def lowest_points(model: mujoco.MjModel, qpos: np.ndarray, geoms: Sequence[int])
         mujoco.mj_kinematics(model, data)
         xpos[t], xmat[t] = data.geom_xpos[ids], data.geom_xmat[ids]
     return geoms_lowest_point(model, xpos, xmat, ids)
-
-
-def foot_geoms(model: mujoco.MjModel, feet: Sequence[Sequence[int]]) -> list[list[int]]:
-    """The collision geoms of each foot's bodies (``feet``: body ids per foot)."""
-    body = np.asarray(model.geom_bodyid)
-    return [[g for g in range(model.ngeom) if int(body[g]) in set(ids)] for ids in feet]
 
 
 def ground_feet(

@@ -142,6 +142,12 @@ def retarget_clip(
 # ---------------------------------------------------------------------------------------------
 
 
+def foot_geoms(model: mujoco.MjModel, feet: Sequence[Sequence[int]]) -> list[list[int]]:
+    """The geoms of each foot's bodies (``feet``: body ids per foot)."""
+    body = np.asarray(model.geom_bodyid)
+    return [[g for g in range(model.ngeom) if int(body[g]) in set(ids)] for ids in feet]
+
+
 def _body_ids(model: mujoco.MjModel, names: Sequence[str]) -> list[int]:
     import mujoco
     return [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in names]
@@ -195,9 +201,6 @@ def foot_artefacts(
     ``feet`` maps ``left_foot``/``right_foot`` to body names (a character's body groups).
     """
     import mujoco
-
-    from retarget.character.grounding import foot_geoms
-
     data = mujoco.MjData(model)
     sides = [_body_ids(model, feet["left_foot"]), _body_ids(model, feet["right_foot"])]
     geoms = foot_geoms(model, sides)
