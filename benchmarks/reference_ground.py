@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 from heldout_eval import KINDS, corpus_files
 
-from retarget.character.grounding import foot_geoms, lowest_points
+from retarget.character.grounding import stance_heights
 from retarget.env.build import env_from_recipe
 from retarget.env.reference import foot_bodies
 from retarget.recipe import load
@@ -37,11 +37,8 @@ def measure(env) -> dict[str, np.ndarray]:
     body is in the air, and the root force the reference asks for (units of body weight)."""
     model, ref = env.world.model, env.reference
     qpos, qvel = ref.qpos64, ref.qvel64
-    contacts = env.library.contacts.numpy()
-    feet = foot_geoms(model, foot_bodies(env.layout, env.character.name))
-    lows = np.stack([lowest_points(model, qpos, g) for g in feet], axis=1)
-    stance = np.where(contacts, lows, np.inf).min(axis=1)
-    stance[~np.isfinite(stance)] = np.nan
+    feet = foot_bodies(env.layout, env.character.name)
+    stance = stance_heights(model, qpos, env.library.contacts.numpy(), feet)
     free = model.__copy__()
     free.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONSTRAINT)
     near = model.__copy__()

@@ -28,8 +28,6 @@ import numpy as np
 
 from retarget.character.kinematic import foot_geoms, geoms_lowest_point
 
-__all__ = ["SMOOTH_SECONDS", "foot_geoms", "ground_feet", "lowest_points"]
-
 SMOOTH_SECONDS = 0.2
 """Width of the moving average over the per-frame correction (seconds)."""
 
@@ -50,6 +48,22 @@ def lowest_points(model: mujoco.MjModel, qpos: np.ndarray, geoms: Sequence[int])
     return geoms_lowest_point(model, xpos, xmat, ids)
 
 
+def stance_heights(
+    model: mujoco.MjModel, qpos: np.ndarray, contacts: np.ndarray, feet: Sequence[Sequence[int]]
+) -> np.ndarray:
+    """Per frame ``(T,)``: the lowest point of the feet the performer has down (``contacts``
+    ``(T, len(feet))``; ``feet``: body ids per foot), metres above the floor; NaN in frames
+    with no foot down."""
+    contacts = np.asarray(contacts, dtype=bool)
+    if contacts.shape != (len(qpos), len(feet)):
+        raise ValueError(
+            f"contact labels of shape {contacts.shape} for {len(qpos)} frames and {len(feet)} feet"
+        )
+    lows = np.stack([lowest_points(model, qpos, g) for g in foot_geoms(model, feet)], axis=1)
+    stance = np.where(contacts, lows, np.inf).min(axis=1)
+    return np.where(np.isfinite(stance), stance, np.nan)
+
+
 def ground_feet(
     model: mujoco.MjModel,
     qpos: np.ndarray,
@@ -61,11 +75,9 @@ def ground_feet(
     feet stand on the floor (z = 0); ``contacts`` ``(T, 2)`` are the clip's left/right foot
     labels and ``feet`` the character's left/right foot body ids. A clip with no foot down in
     any frame comes back unchanged."""
-    contacts = np.asarray(contacts, dtype=bool)
-    if len(qpos) == 0 or contacts.shape != (len(qpos), len(feet)) or not contacts.any():
+    if len(qpos) == 0 or not np.asarray(contacts, dtype=bool).any():
         return qpos
-    lows = np.stack([lowest_points(model, qpos, g) for g in foot_geoms(model, feet)], axis=1)
-    stance = np.where(contacts, lows, np.inf).min(axis=1)
+    stance = stance_heights(model, qpos, contacts, feet)
     down = np.flatnonzero(np.isfinite(stance))
     frames = np.arange(len(qpos))
     shift = np.interp(frames, down, -stance[down])

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from retarget.character import kinematic as km
-from retarget.character.grounding import foot_geoms, ground_feet, lowest_points
+from retarget.character.grounding import ground_feet, stance_heights
 from retarget.errors import PluginError
 from retarget.motion.procedural import default_motions
 from retarget.plugins.characters.dino import Dino
@@ -32,8 +32,7 @@ def _walk_on(character):
 
 def _stance_heights(model, qpos, contacts, feet) -> np.ndarray:
     """The lowest point of the feet the performer has down, in frames with one down."""
-    lows = np.stack([lowest_points(model, qpos, g) for g in foot_geoms(model, feet)], axis=1)
-    stance = np.where(contacts, lows, np.inf).min(axis=1)
+    stance = stance_heights(model, qpos, contacts, feet)
     return stance[np.isfinite(stance)]
 
 
@@ -60,6 +59,13 @@ def test_a_clip_with_no_foot_down_is_left_as_it_is() -> None:
     none = np.zeros_like(clip.contacts, dtype=bool)
     out = ground_feet(model, motion.qpos, none, _feet(model, dino), clip.fps)
     np.testing.assert_array_equal(out, motion.qpos)
+
+
+def test_contact_labels_that_do_not_fit_the_clip_are_refused() -> None:
+    dino = Dino()
+    model, clip, motion = _walk_on(dino)
+    with pytest.raises(ValueError, match="contact labels of shape"):
+        ground_feet(model, motion.qpos, clip.contacts[:-1], _feet(model, dino), clip.fps)
 
 
 def test_the_human_barely_moves() -> None:
