@@ -302,3 +302,21 @@ def test_default_run_names_say_what_differs(tmp_path) -> None:
     }
     assert names == {"dino-hmd", "stairs-dino-hmd", "paper-dino-hmd",
                      "dino-hmd-boxes-height_map"}  # fmt: skip
+
+
+def test_lock_written_again_from_itself_keeps_its_provenance(
+    tmp_path: Path, registry: Registry
+) -> None:
+    """`train --resume` resolves the run's own lock and writes it again: the lock still names
+    the recipe and overrides the run began with, plus the resume's own."""
+    first = load(write(tmp_path, GOOD), registry, assignments=["seed=4"])
+    lock = write_lock(first, tmp_path / "run")
+    again = load(lock, registry, assignments=["sim.threads=1"])
+    data = yaml.safe_load(write_lock(again, tmp_path / "run").read_text())
+    assert data["_lock"]["source"] == first.source.path
+    assert data["_lock"]["overrides"] == {
+        "seed": "--set seed=4",
+        "sim.threads": "--set sim.threads=1",
+    }
+    other = yaml.safe_load(write_lock(again, tmp_path / "copy").read_text())
+    assert other["_lock"]["source"] == again.source.path  # a lock read from elsewhere: as given

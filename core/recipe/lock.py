@@ -41,7 +41,9 @@ def write_lock(resolved: ResolvedRecipe, directory: str | Path) -> Path:
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     target = directory / "recipe.lock.yaml"
-    text = yaml.safe_dump(lock_data(resolved), sort_keys=False)
+    data = lock_data(resolved)
+    _keep_provenance(data, target, resolved)
+    text = yaml.safe_dump(data, sort_keys=False)
     fd, tmp = tempfile.mkstemp(dir=directory, prefix=".recipe.lock.", suffix=".tmp")
     with os.fdopen(fd, "w", encoding="utf-8") as handle:
         handle.write(text)
@@ -49,3 +51,20 @@ def write_lock(resolved: ResolvedRecipe, directory: str | Path) -> Path:
         os.fsync(handle.fileno())
     os.replace(tmp, target)
     return target
+
+
+def _keep_provenance(data: dict[str, Any], target: Path, resolved: ResolvedRecipe) -> None:
+    """A lock written again from itself (``train --resume``) keeps where the run came from:
+    its first source and overrides, with the resume's own overrides added, not the lock's path."""
+    source = resolved.source.path
+    if source is None or not target.is_file() or Path(source).resolve() != target.resolve():
+        return
+    try:
+        before = (yaml.safe_load(target.read_text(encoding="utf-8")) or {}).get("_lock") or {}
+    except (OSError, yaml.YAMLError):
+        return
+    if not isinstance(before, dict) or "source" not in before:
+        return
+    data["_lock"]["source"] = before["source"]
+    overrides = before.get("overrides") if isinstance(before.get("overrides"), dict) else {}
+    data["_lock"]["overrides"] = {**overrides, **data["_lock"]["overrides"]}
