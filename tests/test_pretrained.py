@@ -205,3 +205,17 @@ def test_a_run_locked_before_motions_level_feet_keeps_its_tilted_feet(tmp_path: 
     fresh = tmp_path / "fresh.yaml"
     fresh.write_text("extends: null\ncharacter: human\nsensors: [three_point]\n")
     assert load(str(fresh), registry).recipe.motions.level_feet is True
+
+
+def test_a_run_locked_before_env_hinge_elbows_keeps_its_elbows(tmp_path: Path) -> None:
+    """A lock without ``env.hinge_elbows`` reads as ``false``: its references bent each elbow
+    by the angle alone; a new recipe hinges them."""
+    from retarget.recipe import load
+    from retarget.train.load import locked_recipe
+
+    registry = load_plugins()
+    run = _lock_without(tmp_path / "old", "env", "hinge_elbows")
+    assert locked_recipe(run, registry)[0].recipe.env.hinge_elbows is False
+    fresh = tmp_path / "fresh.yaml"
+    fresh.write_text("extends: null\ncharacter: human\nsensors: [three_point]\n")
+    assert load(str(fresh), registry).recipe.env.hinge_elbows is True

@@ -98,7 +98,8 @@ class RetargetEnv:
         self._mocap_ids = self._scene_mocap_ids()
         self.reference = CharacterReference(character, self.world.model, layout, clips,
                                             mocap=self._clip_placements(len(clips)),
-                                            ground=opts.ground_feet)  # fmt: skip
+                                            ground=opts.ground_feet,
+                                            hinge=opts.hinge_elbows)  # fmt: skip
         self._headset_mount: torch.Tensor | None = None
         self.idle_starts = None
         if opts.idle_starts > 0:
@@ -265,7 +266,8 @@ class RetargetEnv:
             idle = scaled_clip(idle, root_height_ratio(self.character.build_spec().compile(), idle))
         idle = resample(idle, hz)
         ref = CharacterReference(self.character, self.world.model, self.layout, [idle],
-                                 ground=self.options.ground_feet)  # fmt: skip
+                                 ground=self.options.ground_feet,
+                                 hinge=self.options.hinge_elbows)  # fmt: skip
         return ref, idle, min(2, len(ref.qpos64) - 1)
 
     def _default_groups(self) -> dict[str, list[str]]:

@@ -25,6 +25,7 @@ from retarget.errors import PluginError
 from retarget.kinds import Character
 from retarget.kinds.state import Layout, SimState
 from retarget.motion.clip import MotionClip
+from retarget.motion.hinge_elbows import hinge_elbows
 from retarget.scene.contacts import DEFAULT_MARGIN, scene_contact_labels
 from retarget.sim.batched import body_velocities
 from retarget.sim.inverse_dynamics import reference_torques
@@ -54,17 +55,21 @@ class CharacterReference:
         contact_margin: float = DEFAULT_MARGIN,
         mocap: Sequence[tuple[np.ndarray, np.ndarray] | None] | None = None,
         ground: bool = False,
+        hinge: bool = False,
     ) -> None:
         """``mocap``: per clip, every mocap body's position and quaternion while its scene
         contacts are labelled (None: the compiled placement). ``ground``: the root height
         corrected so the performer's stance feet stand on the floor
-        (:func:`retarget.character.grounding.ground_feet`)."""
+        (:func:`retarget.character.grounding.ground_feet`). ``hinge``: the clips' elbows
+        rewritten as hinges first (:mod:`retarget.motion.hinge_elbows`)."""
         joint_map = character.joint_map()
         if joint_map is None:
             raise PluginError(
                 "has no joint map, so human motion cannot be retargeted onto it",
                 plugin=f"character {character.name}",
             )
+        if hinge:
+            clips = [hinge_elbows(c) for c in clips]
         key = reference_key(model, joint_map, clips, contact_margin, mocap, ground)
         cached = load_reference(key)
         if cached is None:

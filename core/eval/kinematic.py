@@ -74,7 +74,8 @@ class KinematicRollout:
         self.env = env
         self.estimate = estimate
         self.reference = CharacterReference(env.character, env.world.model, env.layout,
-                                            estimate.clips)  # fmt: skip
+                                            estimate.clips,
+                                            hinge=env.options.hinge_elbows)  # fmt: skip
         deepest, mean = env.sim.pose_penetration(self.reference.qpos64)
         self.penetration = (torch.from_numpy(deepest).float(), torch.from_numpy(mean).float())
         groups = env.layout.body_groups

@@ -109,6 +109,15 @@ class EnvOptions(BaseModel):
         "a person's (the Dino's stance feet float 3-7 cm otherwise); false: the paper's rough "
         "retargeting as it is",
     )
+    hinge_elbows: bool = Field(
+        True,
+        description="retarget each clip with its elbows rewritten as hinges "
+        "(retarget.motion.hinge_elbows: the elbow's twist and sideways swing moved into the "
+        "shoulder and wrist, the body's pose unchanged), so a character's hinged elbow bends "
+        "the forearm where the person's went; false: the bend angle alone, as runs recorded "
+        "before this field did (hands 12-27 cm from the person's controllers on Bandai Namco "
+        "clips, 9-10 with it)",
+    )
     idle_starts: float = Field(
         0.0, ge=0.0, le=1.0,
         description="share of training episodes that start standing in the character's idle "

@@ -24,6 +24,7 @@ from retarget.train.run_dir import LOCK, latest_checkpoint, resolve_run
 BEFORE_FIELDS: tuple[tuple[str, str, object], ...] = (
     ("env", "devices", "person"),  # its devices were at the performer's size
     ("motions", "level_feet", False),  # its references kept the file's foot tilt
+    ("env", "hinge_elbows", False),  # its references' elbows bent by the angle alone
 )
 """Fields added after runs were recorded, with the value that says what such a run did."""
 

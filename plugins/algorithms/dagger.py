@@ -128,6 +128,11 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
         level = isinstance(taught, dict) and bool(taught.get("level_feet", False))
         recipe["motions"] = {**(recipe.get("motions") or {}), "level_feet": level}
         env = dict(recipe.get("env") or {})
+        # and its elbows bend as they did (env.hinge_elbows; a lock without it: bend alone)
+        taught_env = teacher.get("env")
+        env["hinge_elbows"] = isinstance(taught_env, dict) and bool(
+            taught_env.get("hinge_elbows", False)
+        )
         groups = dict(env.get("groups") or {})
         groups[c.actor_group] = student_actor
         groups[c.teacher_group] = teacher_actor

@@ -81,19 +81,22 @@ def test_cli_teacher_shorthand_writes_an_explicit_recipe(teacher: Path, tmp_path
     assert lock["env"]["groups"]["teacher"] == ["full_body", "reference_action", "proprio"]
     assert [s["type"] for s in lock["sensors"]] == ["three_point", "full_body", "reference_action"]
     assert lock["motions"]["level_feet"] is True  # the teacher's references, as it learned them
+    assert lock["env"]["hinge_elbows"] is True
 
 
 def test_a_student_reads_references_as_its_teacher_learned_them(
     teacher: Path, tmp_path: Path
 ) -> None:
-    """A teacher recorded before ``motions.level_feet`` learned on the file's foot tilt: its
-    students' references keep that tilt, whatever the student's recipe says."""
+    """A teacher recorded before ``motions.level_feet`` learned on the file's foot tilt (and
+    before ``env.hinge_elbows`` on elbows bent by the angle alone): its students' references
+    keep both, whatever the student's recipe says."""
     import shutil
 
     old = tmp_path / "old_teacher"
     shutil.copytree(teacher.resolve(), old)
     lock = yaml.safe_load((old / "recipe.lock.yaml").read_text())
     del lock["motions"]["level_feet"]
+    del lock["env"]["hinge_elbows"]
     (old / "recipe.lock.yaml").write_text(yaml.safe_dump(lock, sort_keys=False))
     recipe = tmp_path / "s.yaml"
     recipe.write_text(STUDENT)
@@ -101,6 +104,7 @@ def test_a_student_reads_references_as_its_teacher_learned_them(
                  "--runs-dir", str(tmp_path), "--no-tensorboard"]) == 0  # fmt: skip
     got = yaml.safe_load((tmp_path / "student" / "latest" / "recipe.lock.yaml").read_text())
     assert got["motions"]["level_feet"] is False
+    assert got["env"]["hinge_elbows"] is False  # and its elbows bent by the angle alone
 
 
 def test_student_learns_resumes_exactly_and_needs_no_teacher(
