@@ -74,6 +74,9 @@ class CharacterCommand(Command):
         ret.add_argument("--fps", type=float, default=15.0, help="frame rate of the output")
         ret.add_argument("--size", type=image_size, default="800x480",
                          help="WIDTHxHEIGHT in pixels")
+        ret.add_argument("--bend-only", action="store_true",
+                         help="drive elbows by the file's bend alone, as runs recorded before "
+                         "env.hinge_elbows did (default: elbows as hinges, as training does)")
 
     def run(self, args: argparse.Namespace) -> int:
         width, height = args.size
@@ -86,6 +89,10 @@ class CharacterCommand(Command):
         else:
             clip = _read_clip(args.clip, registry.motion_formats(), args.joints,
                               args.source_fps)
+            if not args.bend_only:
+                from retarget.motion.hinge_elbows import hinge_elbows
+
+                clip = hinge_elbows(clip)
             info = retarget_video(character, clip, args.out, width, height,
                                   seconds=args.seconds, start=args.start, fps=args.fps)
             print(f"{character.name}: root scale {info['root_scale']:.3f}, joint-limit "
