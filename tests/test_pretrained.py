@@ -193,29 +193,23 @@ def test_a_run_locked_before_env_devices_keeps_the_performers_size(tmp_path: Pat
     assert load(str(fresh), registry).recipe.env.devices == "character"
 
 
-def test_a_run_locked_before_motions_level_feet_keeps_its_tilted_feet(tmp_path: Path) -> None:
-    """A lock without ``motions.level_feet`` reads as ``false``: its policy was trained on
-    the file's foot tilt; a new recipe levels the feet."""
+@pytest.mark.parametrize(
+    ("section", "field"),
+    [("motions", "level_feet"),  # trained on the file's foot tilt; a new recipe levels feet
+     ("env", "hinge_elbows")],  # its elbows bent by the angle alone; a new recipe hinges them
+)  # fmt: skip
+def test_a_run_locked_before_a_switch_keeps_what_it_trained_on(
+    tmp_path: Path, section: str, field: str
+) -> None:
+    """A lock without a later on-by-default switch reads as ``false``, what its references
+    were when it trained; a new recipe without it gets ``true``."""
     from retarget.recipe import load
     from retarget.train.load import locked_recipe
 
     registry = load_plugins()
-    run = _lock_without(tmp_path / "old", "motions", "level_feet")
-    assert locked_recipe(run, registry)[0].recipe.motions.level_feet is False
+    run = _lock_without(tmp_path / "old", section, field)
+    old = locked_recipe(run, registry)[0].recipe
+    assert getattr(getattr(old, section), field) is False
     fresh = tmp_path / "fresh.yaml"
     fresh.write_text("extends: null\ncharacter: human\nsensors: [three_point]\n")
-    assert load(str(fresh), registry).recipe.motions.level_feet is True
-
-
-def test_a_run_locked_before_env_hinge_elbows_keeps_its_elbows(tmp_path: Path) -> None:
-    """A lock without ``env.hinge_elbows`` reads as ``false``: its references bent each elbow
-    by the angle alone; a new recipe hinges them."""
-    from retarget.recipe import load
-    from retarget.train.load import locked_recipe
-
-    registry = load_plugins()
-    run = _lock_without(tmp_path / "old", "env", "hinge_elbows")
-    assert locked_recipe(run, registry)[0].recipe.env.hinge_elbows is False
-    fresh = tmp_path / "fresh.yaml"
-    fresh.write_text("extends: null\ncharacter: human\nsensors: [three_point]\n")
-    assert load(str(fresh), registry).recipe.env.hinge_elbows is True
+    assert getattr(getattr(load(str(fresh), registry).recipe, section), field) is True

@@ -40,6 +40,7 @@ TOOLKIT: dict[str, str] = {
     "retarget.motion.bvh_write": "writing clips as BVH",
     "retarget.motion.camera_rigs": "headset camera rigs (where the tracking cameras sit)",
     "retarget.motion.scene_fit": "fitting props to where a clip sits and steps",
+    "retarget.motion.hinge_elbows": "a clip's elbows rewritten as hinges (its pose unchanged)",
     "retarget.expert.*": "tracking experts (paths, beam search, iLQR refinement) and their files, "
     "for planners and students that learn from them",
     "retarget.learn.*": "building blocks of algorithm plugins (networks, PPO, DAgger, ...)",
