@@ -6,7 +6,7 @@ the forearm well off the flexion plane; other files leave it in the shoulder). A
 elbow is a hinge, and the joint map drives it by the bend angle alone
 (:func:`retarget.character.joint_map.elbow_link`), so whatever else the file's elbow did is
 lost: the forearm bends in the wrong plane, and the character's hands land 12 cm (walks) to
-27 cm (runs, arm-waving) from the controllers the person held, although the body was copied
+28-33 cm (runs, arm waves) from the controllers the person held, although the body was copied
 joint for joint.
 
 This rewrites each frame's shoulder, elbow and wrist rotations so that the elbow is exactly a

@@ -115,7 +115,7 @@ class EnvOptions(BaseModel):
         "(retarget.motion.hinge_elbows: the elbow's twist and sideways swing moved into the "
         "shoulder and wrist, the body's pose unchanged), so a character's hinged elbow bends "
         "the forearm where the person's went; false: the bend angle alone, as runs recorded "
-        "before this field did (hands 12-27 cm from the person's controllers on Bandai Namco "
+        "before this field did (hands 12-33 cm from the person's controllers on Bandai Namco "
         "clips, 9-10 with it)",
     )
     idle_starts: float = Field(
