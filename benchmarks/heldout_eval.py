@@ -76,9 +76,15 @@ def write_rest_ends(files: list[Path], folder: Path, which: str = "both") -> int
     return count
 
 
-def evaluate(run: str, files: list[Path], num_envs: int, sets: list[str] = (),
-             checkpoint: str | None = None, rest: str | None = None,
-             whole: bool = False) -> dict:
+def evaluate(
+    run: str,
+    files: list[Path],
+    num_envs: int,
+    sets: list[str] = (),
+    checkpoint: str | None = None,
+    rest: str | None = None,
+    whole: bool = False,
+) -> dict:
     """``retarget eval --protocol phc`` over ``files`` (linked into one folder), or over
     their rest-end variants (``rest``: which, see :func:`write_rest_ends`): its overall
     figures, or (``whole``) its whole report, per clip included."""
@@ -143,14 +149,28 @@ def main() -> int:
     parser.add_argument("--num-envs", type=int, default=64)
     parser.add_argument("--out", type=Path, help="JSON of every figure")
     parser.add_argument("--checkpoint", help="a checkpoint file of the (one) run")
-    parser.add_argument("--set", dest="sets", action="append", default=[],
-                        help="passed to retarget eval (e.g. algorithm.reach_controllers=false)")
-    parser.add_argument("--rest-ends", nargs="?", const="both",
-                        choices=("both", "from_rest", "to_rest"),
-                        help="measure each clip's start from (from_rest) and/or stop to "
-                        "(to_rest) standing still instead of the clip")
-    parser.add_argument("--by-speed", type=int, default=0, metavar="K",
-                        help="also pool each kind's clips in K groups by ground speed")
+    parser.add_argument(
+        "--set",
+        dest="sets",
+        action="append",
+        default=[],
+        help="passed to retarget eval (e.g. algorithm.reach_controllers=false)",
+    )
+    parser.add_argument(
+        "--rest-ends",
+        nargs="?",
+        const="both",
+        choices=("both", "from_rest", "to_rest"),
+        help="measure each clip's start from (from_rest) and/or stop to "
+        "(to_rest) standing still instead of the clip",
+    )
+    parser.add_argument(
+        "--by-speed",
+        type=int,
+        default=0,
+        metavar="K",
+        help="also pool each kind's clips in K groups by ground speed",
+    )
     args = parser.parse_args()
     if args.by_speed < 0 or (args.by_speed and args.rest_ends):
         parser.error("--by-speed takes a positive count and measures the clips themselves")
@@ -163,8 +183,9 @@ def main() -> int:
             if not files:
                 print(f"no {kind} clips of style {args.style}", file=sys.stderr)
                 continue
-            report = evaluate(run, files, args.num_envs, args.sets, args.checkpoint,
-                              args.rest_ends, whole=True)
+            report = evaluate(
+                run, files, args.num_envs, args.sets, args.checkpoint, args.rest_ends, whole=True
+            )
             overall = report["overall"]
             results[run][kind] = {k: overall[k] for k in FIGURES if k in overall}
             results[run][kind]["clips"] = len(files)
@@ -179,12 +200,17 @@ def main() -> int:
             cells = " ".join(f"{figures.get(k, float('nan')):14.3f}" for k in FIGURES[:-1])
             print(f"{kind:8} {figures['clips']:5d} {cells}")
         for kind, table in speed_tables.get(run, {}).items():
-            print(f"\n{kind} by the performer's ground speed (m/s): clips, success, MPJPE mm, "
-                  "G-MPJPE mm, falls/min, headset cm")
+            print(
+                f"\n{kind} by the performer's ground speed (m/s): clips, success, MPJPE mm, "
+                "G-MPJPE mm, falls/min, headset cm"
+            )
             for r in table:
-                print(f"  {r['speed_from']:4.2f}-{r['speed_to']:4.2f} {r['clips']:4d} "
-                      f"{r['phc_success']:6.3f} {r['phc_mpjpe_mm']:7.1f} {r['phc_g_mpjpe_mm']:7.1f} "
-                      f"{r['falls_per_min']:6.2f} {r['headset_cm']:6.1f}")
+                print(
+                    f"  {r['speed_from']:4.2f}-{r['speed_to']:4.2f} {r['clips']:4d} "
+                    f"{r['phc_success']:6.3f} {r['phc_mpjpe_mm']:7.1f} "
+                    f"{r['phc_g_mpjpe_mm']:7.1f} {r['falls_per_min']:6.2f} "
+                    f"{r['headset_cm']:6.1f}"
+                )
     if args.out:
         args.out.write_text(json.dumps(results, indent=2))
         print(f"wrote {args.out}")

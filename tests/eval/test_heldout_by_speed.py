@@ -11,7 +11,7 @@ from retarget.motion.bvh_write import write_bvh
 from retarget.motion.procedural import default_motions
 
 sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
-from heldout_eval import by_speed, ground_speed  # noqa: E402
+from heldout_eval import by_speed, ground_speed
 
 
 def test_clips_are_pooled_slowest_first_with_their_own_figures(tmp_path) -> None:
