@@ -108,17 +108,14 @@ def evaluate(
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def ground_speed(path: Path) -> float:
-    """The performer's mean horizontal root speed over a clip, m/s (its own size)."""
-    import numpy as np
-
-    import retarget
+def ground_speed(path: Path, formats) -> float:
+    """The performer's mean horizontal root speed over a clip, m/s (its own size);
+    ``formats``: the motion readers (``retarget.load_plugins().motion_formats()``)."""
     from retarget.motion.clip_cache import read_cached
+    from retarget.motion.rest_ends import root_speed
     from retarget.motion.sources import reader_for
 
-    clip = read_cached(reader_for(path, retarget.load_plugins().motion_formats()), path, None)
-    step = np.linalg.norm(np.diff(clip.global_pos[:, 0, :2], axis=0), axis=-1)
-    return float(step.mean() * clip.fps) if len(step) else 0.0
+    return float(root_speed(read_cached(reader_for(path, formats), path, None)).mean())
 
 
 def by_speed(files: list[Path], clips: dict[str, dict], groups: int) -> list[dict[str, float]]:
@@ -126,7 +123,10 @@ def by_speed(files: list[Path], clips: dict[str, dict], groups: int) -> list[dic
     ``groups`` groups of ``files`` by ground speed, slowest first (clips weigh equally)."""
     import numpy as np
 
-    speeds = sorted((ground_speed(f), f.stem) for f in files if f.stem in clips)
+    import retarget
+
+    formats = retarget.load_plugins().motion_formats()
+    speeds = sorted((ground_speed(f, formats), f.stem) for f in files if f.stem in clips)
     out = []
     for part in np.array_split(np.arange(len(speeds)), groups):
         if not len(part):

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+import retarget
 from retarget.motion.bvh_write import write_bvh
 from retarget.motion.procedural import default_motions
 
@@ -17,7 +18,8 @@ from heldout_eval import by_speed, ground_speed
 def test_clips_are_pooled_slowest_first_with_their_own_figures(tmp_path) -> None:
     idle, walk, turn = default_motions(names=("idle", "walk", "turn_left"))
     files = [write_bvh(c, tmp_path / f"{c.name}.bvh") for c in (walk, idle, turn)]
-    speeds = {f.stem: ground_speed(f) for f in files}
+    formats = retarget.load_plugins().motion_formats()
+    speeds = {f.stem: ground_speed(f, formats) for f in files}
     assert speeds["idle"] < 0.05 and speeds["walk"] == pytest.approx(1.1, rel=0.15), speeds
     figures = {"idle": {"phc_success": 1.0, "headset_cm": 2.0},
                "walk": {"phc_success": 0.0, "headset_cm": 30.0},
