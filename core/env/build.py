@@ -6,6 +6,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from retarget.env.env import RetargetEnv
+from retarget.errors import RecipeError
 from retarget.kinds import (
     Character,
     MotionFormat,
@@ -18,6 +19,7 @@ from retarget.kinds import (
 )
 from retarget.kinds.lookup import PluginLookup
 from retarget.motion.clip import MotionClip
+from retarget.motion.clip_weights import clip_weights
 from retarget.motion.level_feet import with_level_feet
 from retarget.motion.rest_ends import with_rest_ends
 from retarget.motion.sources import load_motions
@@ -92,6 +94,7 @@ def env_from_recipe(
     options = recipe.env
     if num_envs is not None:
         options = options.model_copy(update={"num_envs": num_envs})
+    weights = None
     if clips is None:
         own = motions is None
         clips = load_motions(
@@ -104,6 +107,11 @@ def env_from_recipe(
             clips = with_level_feet(clips)
         if own and recipe.motions.rest_ends:
             clips = with_rest_ends(clips)
+        if own and recipe.motions.weights:
+            try:
+                weights = clip_weights(clips, recipe.motions.weights)
+            except ValueError as err:
+                raise RecipeError(str(err), field="motions.weights") from err
     sensors: list[Sensor] = made("sensor")
     observers: list[Observer] = made("observer")
     scene: Scene | None = scenes[0] if scenes else None
@@ -120,4 +128,5 @@ def env_from_recipe(
         options=options,
         sim=sim,
         seed=recipe.seed if seed is None else seed,
+        clip_weights=weights,
     )

@@ -71,6 +71,7 @@ class RetargetEnv:
         options: EnvOptions | None = None,
         sim: SimSettings | None = None,
         seed: int = 0,
+        clip_weights: Sequence[float] | None = None,
     ) -> None:
         self.options = opts = options or EnvOptions()
         sim = sim or SimSettings()
@@ -94,7 +95,7 @@ class RetargetEnv:
         self.layout = layout = self.world.layout
         hz = sim.control_hz
         clips = [resample(c, hz) for c in clips]
-        self.library = MotionLibrary(clips, fps=hz)
+        self.library = MotionLibrary(clips, fps=hz, weights=clip_weights)
         self._mocap_ids = self._scene_mocap_ids()
         self.reference = CharacterReference(character, self.world.model, layout, clips,
                                             mocap=self._clip_placements(len(clips)),

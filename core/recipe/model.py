@@ -69,6 +69,15 @@ class MotionsSection(Strict):
         "level_feet): a file's ankle-to-toe bone is not the sole, and a character trained on "
         "it stands on tiptoe (Bandai Namco: 19 degrees) or on its heels",
     )
+    weights: dict[
+        Annotated[str, Field(min_length=1, max_length=200)],
+        Annotated[float, Field(ge=0.0, le=1000.0, allow_inf_nan=False)],
+    ] = Field(
+        default_factory=dict, max_length=100,
+        description="how often clips are drawn in training: shell patterns on the file name "
+        "-> weight (e.g. {'*_run_*': 3}: runs three times as likely); a clip matching several "
+        "takes their product, one matching none keeps 1; a pattern matching no clip is an error",
+    )
 
 
 class Recipe(Strict):
