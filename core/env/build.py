@@ -56,6 +56,7 @@ def env_from_recipe(
     seed: int | None = None,
     include: Sequence[str] | None = None,
     exclude: Sequence[str] | None = None,
+    weighted: bool = True,
 ) -> RetargetEnv:
     """Instantiate every component of ``resolved``, load its motions and build the env.
 
@@ -65,7 +66,9 @@ def env_from_recipe(
     ``registry`` is the invocation's plugins (motion formats come from it); ``seed``
     replaces the recipe's (each rank of a distributed run has its own); ``include`` and
     ``exclude`` pick files by name (default: the recipe's own picks, which apply only to the
-    recipe's own path: a held-out set is named with the path that replaces it).
+    recipe's own path: a held-out set is named with the path that replaces it);
+    ``weighted=False`` leaves ``motions.weights`` out: they say how often training draws each
+    clip, and a run loaded to act (eval, play, serve) draws none, possibly from other clips.
     """
     recipe = resolved.recipe
 
@@ -107,7 +110,7 @@ def env_from_recipe(
             clips = with_level_feet(clips)
         if own and recipe.motions.rest_ends:
             clips = with_rest_ends(clips)
-        if own and recipe.motions.weights:
+        if own and weighted and recipe.motions.weights:
             try:
                 weights = clip_weights(clips, recipe.motions.weights)
             except ValueError as err:

@@ -137,6 +137,7 @@ def load_run(
         registry=registry,
         include=include,
         exclude=exclude,
+        weighted=False,
     )
     algorithm = resolved.component("algorithm").instantiate()
     assert isinstance(algorithm, Algorithm)

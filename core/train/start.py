@@ -60,7 +60,8 @@ def check_motion_source(motions: MotionsSection) -> None:
 
     if motions.path or os.environ.get(ENV_VAR, "").strip():
         return
-    picks = {k: v for k, v in (("include", motions.include), ("exclude", motions.exclude)) if v}
+    picks = {k: v for k, v in (("include", motions.include), ("exclude", motions.exclude),
+                               ("weights", motions.weights)) if v}  # fmt: skip
     if picks:
         shown = ", ".join(f"motions.{k}={v}" for k, v in picks.items())
         raise RecipeError(
@@ -69,7 +70,8 @@ def check_motion_source(motions: MotionsSection) -> None:
             "generated clips; a shipped model's lock leaves its data out",
             field="motions.path",
             hint="give --motions PATH (e.g. ../shared/data/mocap_corpus), or drop the "
-            "patterns (--set motions.include=[] --set motions.exclude=[]) to train on the "
+            "patterns (--set motions.include=[] --set motions.exclude=[] --set "
+            "motions.weights={}) to train on the "
             "generated clips",
         )
 

@@ -62,3 +62,17 @@ def test_a_misspelt_pattern_is_a_recipe_error_naming_the_field() -> None:
 def test_weights_out_of_range_are_refused_by_the_recipe() -> None:
     with pytest.raises(retarget.RecipeError, match=r"motions\.weights"):
         _env("{'walk': -1}")
+
+
+def test_a_run_loaded_to_act_ignores_training_weights() -> None:
+    """A shipped lock keeps its weights but not its data: loading it on other clips (eval,
+    play, serve) must not trip over patterns written for the training corpus."""
+    from retarget.env.build import env_from_recipe
+    from retarget.recipe import load
+
+    registry = retarget.load_plugins()
+    recipe = load(None, registry, assignments=["motions.weights={'*_run_*': 3}"])
+    with pytest.raises(retarget.RecipeError, match="_run_"):
+        env_from_recipe(recipe, num_envs=2, registry=registry)
+    env = env_from_recipe(recipe, num_envs=2, registry=registry, weighted=False)
+    assert bool((env.library.weights == 1).all())
