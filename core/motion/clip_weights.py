@@ -10,16 +10,16 @@ failure curriculum's uniform share follows the same weights.
 
 from __future__ import annotations
 
-import fnmatch
 from collections.abc import Mapping, Sequence
 
 from retarget.motion.clip import MotionClip
+from retarget.motion.sources import name_matches
 
 
 def clip_file_name(clip: MotionClip) -> str:
     """The name patterns are matched against: the clip's file name (its start and stop
-    variants keep their file's), else the clip's own name; lower case, as file picks match."""
-    return (clip.source.name if clip.source is not None else clip.name).lower()
+    variants keep their file's), else the clip's own name."""
+    return clip.source.name if clip.source is not None else clip.name
 
 
 def clip_weights(clips: Sequence[MotionClip], weights: Mapping[str, float]) -> list[float]:
@@ -29,7 +29,7 @@ def clip_weights(clips: Sequence[MotionClip], weights: Mapping[str, float]) -> l
     names = [clip_file_name(c) for c in clips]
     out = [1.0] * len(clips)
     for pattern, weight in weights.items():
-        hits = [i for i, n in enumerate(names) if fnmatch.fnmatch(n, pattern.lower())]
+        hits = [i for i, n in enumerate(names) if name_matches(n, (pattern,))]
         if not hits:
             raise ValueError(f"motions.weights: pattern {pattern!r} matches none of the "
                              f"{len(clips)} clips' file names")  # fmt: skip

@@ -107,15 +107,18 @@ def reader_for(path: Path, formats: Mapping[str, ClipReader]) -> ClipReader:
     )
 
 
+def name_matches(name: str, patterns: Sequence[str]) -> bool:
+    """Whether a file name matches one of ``patterns`` (shell patterns, case-insensitive): the
+    one rule for picking motion files and for weighting their clips."""
+    return any(fnmatch.fnmatch(name.lower(), p.lower()) for p in patterns)
+
+
 def select(files: Sequence[Path], include: Sequence[str] = (),
            exclude: Sequence[str] = ()) -> list[Path]:  # fmt: skip
     """``files`` whose name matches one of ``include`` (all when empty) and none of
-    ``exclude`` (shell patterns on the file name, case-insensitive)."""
-
-    def hit(f: Path, patterns: Sequence[str]) -> bool:
-        return any(fnmatch.fnmatch(f.name.lower(), p.lower()) for p in patterns)
-
-    return [f for f in files if (not include or hit(f, include)) and not hit(f, exclude)]
+    ``exclude`` (:func:`name_matches`)."""
+    picked = [f for f in files if not include or name_matches(f.name, include)]
+    return [f for f in picked if not name_matches(f.name, exclude)]
 
 
 def load_motions(
