@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 import torch
+import yaml
 from helpers import REPO, TINY_TEACHER
 
 import retarget.pretrained as pretrained
@@ -17,7 +18,7 @@ from retarget.errors import RetargetError
 from retarget.kinds.capabilities import PoseEstimating
 from retarget.pretrained import ModelCard
 from retarget.registry.loader import load_plugins
-from retarget.train.load import load_run
+from retarget.train.load import load_run, locked_recipe, prepared_recipe
 from retarget.train.package_model import package
 
 SHIPPED = pretrained.names()
@@ -123,6 +124,31 @@ def test_every_shipped_model_loads_and_acts(name: str) -> None:
     assert all(torch.isfinite(v).all() for v in obs.values())
     size = sum(f.stat().st_size for f in pretrained.model_dir(name).rglob("*") if f.is_file())
     assert size < 5e6
+
+
+
+
+def _locked_algorithm(name: str) -> dict:
+    lock = pretrained.model_dir(name) / "recipe.lock.yaml"
+    return yaml.safe_load(lock.read_text(encoding="utf-8")).get("algorithm") or {}
+
+
+STUDENTS = [n for n in SHIPPED if "teacher" in _locked_algorithm(n)]
+
+
+@pytest.mark.parametrize("name", STUDENTS)
+def test_every_shipped_student_names_a_shipped_teacher_it_can_distil_from(name: str) -> None:
+    """The student's lock can be trained on (resume, --init-from): its teacher is a shipped
+    model holding the checkpoint it names, configured as the student read it."""
+    registry = load_plugins()
+    resolved, _ = locked_recipe(pretrained.model_dir(name), registry)
+    algorithm = resolved.to_dict()["algorithm"]
+    assert pretrained.is_pretrained(algorithm["teacher"])
+    teacher = pretrained.resolve(algorithm["teacher"])
+    if algorithm.get("teacher_checkpoint"):
+        assert (teacher / algorithm["teacher_checkpoint"]).is_file()
+    prepared = prepared_recipe(resolved, registry)  # raises on a sensor set up otherwise
+    assert prepared.to_dict()["sensors"] == resolved.to_dict()["sensors"]
 
 
 def test_the_package_ships_every_model_file() -> None:
