@@ -20,10 +20,12 @@ import csv
 import json
 import math
 import shutil
+import sys
 from pathlib import Path
 
 import yaml
 
+from retarget.errors import RetargetError
 from retarget.pretrained import MODELS, ModelCard
 from retarget.train.package_model import package
 from retarget.train.run_dir import CHECKPOINTS, LOCK, latest_checkpoint, resolve_run
@@ -81,6 +83,31 @@ def students_checkpoints(name: str, models: Path = MODELS) -> dict[str, bytes]:
         if rel and path.is_file() and path.parent == models / name / CHECKPOINTS:
             kept[path.name] = path.read_bytes()
     return kept
+
+
+def students_left_behind(name: str, models: Path = MODELS) -> list[str]:
+    """Shipped students whose locks no longer prepare unchanged against teacher ``name`` as
+    now packaged (a sensor set up otherwise, other references or elbows): their kept teacher
+    checkpoint would run under a recipe it was not trained with."""
+    from retarget.registry.loader import load_plugins
+    from retarget.train.load import locked_recipe, prepared_recipe
+
+    registry = load_plugins()
+    behind = []
+    for lock_path in sorted(models.glob(f"*/{LOCK}")):
+        algorithm = yaml.safe_load(lock_path.read_text()).get("algorithm")
+        if not isinstance(algorithm, dict) or algorithm.get("teacher") != f"pretrained:{name}":
+            continue
+        try:
+            resolved, _ = locked_recipe(lock_path.parent, registry)
+            same = prepared_recipe(resolved, registry).to_dict() == resolved.to_dict()
+        except RetargetError as exc:
+            same, reason = False, str(exc)
+        else:
+            reason = "its recipe would change to the new teacher's references"
+        if not same:
+            behind.append(f"{lock_path.parent.name}: {reason}")
+    return behind
 
 
 def main() -> int:
@@ -151,6 +178,14 @@ def main() -> int:
     print(out)
     if not args.no_state:
         print(keep_state(run, args.name, card.teacher))
+    behind = students_left_behind(args.name)
+    for line in behind:
+        print(f"error: shipped student {line}", file=sys.stderr)
+    if behind:
+        print("hint: ship the teacher those students learned from under a name of its own "
+              "and point their locks' algorithm.teacher at it (as human-hmd-teacher)",
+              file=sys.stderr)
+        return 1
     return 0
 
 

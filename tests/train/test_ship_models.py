@@ -94,3 +94,26 @@ def test_a_shipped_teacher_is_its_new_checkpoint_beside_a_higher_numbered_kept_o
         latest_checkpoint(out)
     (out / CHECKPOINTS / CURRENT).unlink()
     assert latest_checkpoint(out).name == "ckpt-0000962.pt"  # a run without the marker
+
+
+def test_a_student_whose_teacher_moved_to_another_recipe_is_named(tmp_path: Path) -> None:
+    """A kept teacher checkpoint runs under the teacher's new lock: a student whose lock no
+    longer prepares unchanged against it (here the headset student pointed at the teacher
+    whose residual base reads two frames ahead) is reported, its own teacher is not."""
+    import shutil
+
+    import yaml
+
+    from retarget import pretrained
+
+    shipped = pretrained.model_dir("human-hmd-student")
+    student = tmp_path / "s"
+    student.mkdir()
+    lock = yaml.safe_load((shipped / "recipe.lock.yaml").read_text())
+    assert lock["algorithm"]["teacher"] == "pretrained:human-hmd-teacher"
+    shutil.copy2(shipped / "recipe.lock.yaml", student / "recipe.lock.yaml")
+    assert ship_models.students_left_behind("human-hmd-teacher", tmp_path) == []
+    lock["algorithm"]["teacher"] = "pretrained:human-teacher"
+    (student / "recipe.lock.yaml").write_text(yaml.safe_dump(lock, sort_keys=False))
+    behind = ship_models.students_left_behind("human-teacher", tmp_path)
+    assert len(behind) == 1 and behind[0].startswith("s: ") and "reference_action" in behind[0]
