@@ -126,8 +126,6 @@ def test_every_shipped_model_loads_and_acts(name: str) -> None:
     assert size < 5e6
 
 
-
-
 def _locked_algorithm(name: str) -> dict:
     lock = pretrained.model_dir(name) / "recipe.lock.yaml"
     return yaml.safe_load(lock.read_text(encoding="utf-8")).get("algorithm") or {}
