@@ -149,6 +149,7 @@ def _train(args: argparse.Namespace, registry: Registry, comm: Comm) -> int:
     from retarget.train.start import (
         check_motion_source,
         check_start,
+        fields_newer_than_lock,
         resume_recipe,
         run_name,
         run_settings,
@@ -176,6 +177,9 @@ def _train(args: argparse.Namespace, registry: Registry, comm: Comm) -> int:
                             *args.assignments]  # fmt: skip
         resolved = prepared_recipe(load_from_args(args, registry), registry)
         check_motion_source(resolved.recipe.motions)
+        if comm.main:
+            for line in fields_newer_than_lock(args.recipe, resolved, args.assignments):
+                warning(line)
         # only rank 0 creates it; removed again if the start fails
         context = (starting_run(args.runs_dir, run_name(resolved)) if comm.main
                    else nullcontext(Path()))  # fmt: skip

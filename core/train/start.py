@@ -76,6 +76,47 @@ def check_motion_source(motions: MotionsSection) -> None:
         )
 
 
+def fields_newer_than_lock(
+    recipe_file: str | Path | None, resolved: ResolvedRecipe, assignments: list[str]
+) -> list[str]:
+    """Notes for a run started from a ``recipe.lock.yaml`` recorded before a field of
+    :data:`~retarget.train.load.BEFORE_FIELDS` existed: the new run takes today's default,
+    which may not be what the run it came from did (a teacher fine-tuned from an old lock
+    would otherwise move to hinged elbows unannounced, and its students' references with it).
+    ``--set SECTION.FIELD=...`` silences the note for that field."""
+    from retarget.recipe.source import LOCK_SECTION, read_recipe_file
+    from retarget.train.load import BEFORE_FIELDS
+
+    if recipe_file is None or not Path(recipe_file).is_file():
+        return []
+    path = Path(recipe_file)
+    if f"\n{LOCK_SECTION}:" not in "\n" + path.read_text(encoding="utf-8", errors="replace"):
+        return []
+    data = read_recipe_file(path).data
+    notes = []
+    for section, field, before in BEFORE_FIELDS:
+        part = data.get(section)
+        key = f"{section}.{field}"
+        if not isinstance(part, dict) or field in part:
+            continue
+        if any(a.split("=", 1)[0].strip() == key for a in assignments):
+            continue
+        now = getattr(getattr(resolved.recipe, section), field)
+        if now != before:
+            was = _as_set(before)
+            notes.append(
+                f"{path} was locked before {key} existed: this run takes today's default "
+                f"({_as_set(now)}), the run it records had {was} (--set {key}={was} trains "
+                "as it did)"
+            )
+    return notes
+
+
+def _as_set(value: object) -> str:
+    """A value as ``--set`` reads it (YAML: booleans lower case)."""
+    return str(value).lower() if isinstance(value, bool) else str(value)
+
+
 def start_assignments(*, teacher: str | None, expert: str | None, num_envs: int | None,
                       threads: int | None) -> list[str]:  # fmt: skip
     """The recipe overrides that the start flags stand for, so ``recipe.lock.yaml`` records
