@@ -142,6 +142,7 @@ def test_every_shipped_student_names_a_shipped_teacher_it_can_distil_from(name: 
     resolved, _ = locked_recipe(pretrained.model_dir(name), registry)
     algorithm = resolved.to_dict()["algorithm"]
     assert pretrained.is_pretrained(algorithm["teacher"])
+    assert pretrained.card(name).teacher == algorithm["teacher"]  # the card says the same
     teacher = pretrained.resolve(algorithm["teacher"])
     if algorithm.get("teacher_checkpoint"):
         assert (teacher / algorithm["teacher_checkpoint"]).is_file()
