@@ -152,7 +152,8 @@ def test_every_shipped_student_names_a_shipped_teacher_it_can_distil_from(name: 
 
 def test_the_package_ships_every_model_file() -> None:
     text = (REPO / "pyproject.toml").read_text()
-    for pattern in ("models/*/card.json", "models/*/recipe.lock.yaml", "models/*/checkpoints/*.pt"):
+    for pattern in ("models/*/card.json", "models/*/recipe.lock.yaml", "models/*/checkpoints/*.pt",
+                    "models/*/checkpoints/CURRENT"):  # which checkpoint a model acts with
         assert pattern in text
 
 
