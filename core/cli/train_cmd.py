@@ -178,7 +178,7 @@ def _train(args: argparse.Namespace, registry: Registry, comm: Comm) -> int:
         resolved = prepared_recipe(load_from_args(args, registry), registry)
         check_motion_source(resolved.recipe.motions)
         if comm.main:
-            for line in fields_newer_than_lock(args.recipe, resolved, args.assignments):
+            for line in fields_newer_than_lock(args.recipe, resolved):
                 warning(line)
         # only rank 0 creates it; removed again if the start fails
         context = (starting_run(args.runs_dir, run_name(resolved)) if comm.main

@@ -76,30 +76,27 @@ def check_motion_source(motions: MotionsSection) -> None:
         )
 
 
-def fields_newer_than_lock(
-    recipe_file: str | Path | None, resolved: ResolvedRecipe, assignments: list[str]
-) -> list[str]:
+def fields_newer_than_lock(recipe_file: str | Path | None, resolved: ResolvedRecipe) -> list[str]:
     """Notes for a run started from a ``recipe.lock.yaml`` recorded before a field of
     :data:`~retarget.train.load.BEFORE_FIELDS` existed: the new run takes today's default,
     which may not be what the run it came from did (a teacher fine-tuned from an old lock
     would otherwise move to hinged elbows unannounced, and its students' references with it).
-    ``--set SECTION.FIELD=...`` silences the note for that field."""
-    from retarget.recipe.source import LOCK_SECTION, read_recipe_file
+    A field set on the command line (``--set SECTION.FIELD=...``) gets no note."""
+    from retarget.recipe.source import LOCK_SECTION, parse_text
     from retarget.train.load import BEFORE_FIELDS
 
     if recipe_file is None or not Path(recipe_file).is_file():
         return []
     path = Path(recipe_file)
-    if f"\n{LOCK_SECTION}:" not in "\n" + path.read_text(encoding="utf-8", errors="replace"):
+    text = path.read_text(encoding="utf-8", errors="replace")
+    if f"\n{LOCK_SECTION}:" not in "\n" + text:
         return []
-    data = read_recipe_file(path).data
+    data = parse_text(text, str(path), path.suffix).data
     notes = []
     for section, field, before in BEFORE_FIELDS:
         part = data.get(section)
         key = f"{section}.{field}"
-        if not isinstance(part, dict) or field in part:
-            continue
-        if any(a.split("=", 1)[0].strip() == key for a in assignments):
+        if not isinstance(part, dict) or field in part or key in resolved.source.overrides:
             continue
         now = getattr(getattr(resolved.recipe, section), field)
         if now != before:
