@@ -29,6 +29,7 @@ def main() -> int:
     parser.add_argument("--max-clips", type=int, default=3)
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--jobs", type=int, default=1)
+    parser.add_argument("--method", default="beam", help="planner plugin (beam, beam_ilqr)")
     parser.add_argument("--planner", action="append", default=[], metavar="KEY=VALUE")
     parser.add_argument("--set", dest="sets", action="append", default=[], metavar="PATH=VALUE",
                         help="recipe field for the planner's env, e.g. motions.level_feet=false")
@@ -42,7 +43,8 @@ def main() -> int:
         files = corpus_files(args.style, kind, args.max_clips)
         cmd = [sys.executable, "-m", "retarget", "expert", *map(str, files), "--out", str(out),
                "--character", args.character, "--seconds", str(args.seconds),
-               "--jobs", str(args.jobs), *(f"--planner={p}" for p in args.planner),
+               "--jobs", str(args.jobs), "--method", args.method,
+               *(f"--planner={p}" for p in args.planner),
                *(f"--set={a}" for a in args.sets)]  # fmt: skip
         subprocess.run(cmd, check=True)
         report = json.loads((out / "report.json").read_text())["clips"]

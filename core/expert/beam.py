@@ -19,6 +19,7 @@ back with the step and no per-sample loop runs in Python.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -80,6 +81,10 @@ class BeamTracker:
         """Segments planned again by the rescue (all clips so far)."""
         plan = settings.model_copy(update={"threads": threads, "backend": "mujoco"})
         self.sim = make_sim(env.sim.model, layout, c.samples, plan)
+        self._looked = max(c.beam, math.ceil(c.lookahead_share * c.samples))
+        self.look_sim = self.sim
+        if self._looked < c.samples:
+            self.look_sim = make_sim(env.sim.model, layout, self._looked, plan)
         self._fields = self.sim.STATE_FIELDS
         model = self.sim.model
         self._dof = np.asarray(model.jnt_dofadr[model.actuator_trnid[: layout.nu, 0]], np.intp)
@@ -132,17 +137,19 @@ class BeamTracker:
         q = self.env.reference.qpos64[rows][:, self._aq]
         return np.clip(q / self._scale, self._lo, self._hi)
 
-    def _cost(self, row: int, w: CostWeights | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Every sample's cost against reference row ``row`` and its mean world distance of
-        the bodies (m)."""
+    def _cost(self, row: int, w: CostWeights | None = None, sim=None
+              ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+        """Every sample's (every row of ``sim``'s, default the samples') cost against
+        reference row ``row`` and its mean world distance of the bodies (m)."""
         ref, lay = self.env.reference, self.env.layout
         w = w or self.config.weights
-        s = self.sim.state
+        sim = sim or self.sim
+        s = sim.state
         bp, rb = s.body_pos.numpy(), ref.arrays["body_pos"][row].numpy()
         body = np.linalg.norm(bp - rb, axis=-1).mean(-1)
         pose = np.linalg.norm((bp - bp[:, :1]) - (rb - rb[:1]), axis=-1).mean(-1)
-        q = self.sim.raw("qpos")[:, : lay.nq]
-        v = self.sim.raw("qvel")[:, : lay.nv]
+        q = sim.raw("qpos")[:, : lay.nq]
+        v = sim.raw("qvel")[:, : lay.nv]
         rq, rv = ref.qpos64[row], ref.qvel64[row]
         dot = np.minimum(np.abs(q[:, 3:7] @ rq[3:7]), 1.0)
         cost = (
@@ -317,20 +324,32 @@ class BeamTracker:
             if mode.running:
                 running += self._cost(int(rows[j]), mode.weights)[0] / S
         end_state = self.sim.state_dict()
+        effort = mode.weights.effort * np.square(off).mean(-1)
+        look = np.arange(K)  # the samples continued through the lookahead
+        sim = self.sim
+        if mode.lookahead and rows[-1] < last_row and self._looked < K:
+            early = self._cost(int(rows[-1]), mode.weights)[0] + mode.running * running + effort
+            early[bad] = np.inf
+            look = np.argsort(early, kind="stable")[: self._looked]
+            sim = self.look_sim
+            sim.load_state_dict({k: v[look] for k, v in end_state.items()})
+        look_bad = bad[look]
         scored = rows[-1].item()
         for _ in range(mode.lookahead):
             row = min(scored + 1, last_row)
             if row == scored:
                 break
-            angles = self.sim.raw("qpos")[:, self._aq]
+            angles = sim.raw("qpos")[:, self._aq]
             fb = c.gain * (ref_q[row][self._aq][None] - angles) / self._scale
             target = self._nominal(np.array([min(row + c.lead, last_row)]))[0]
             ff = self._feedforward(row)[None]
-            bad |= self.sim.step(np.clip(target[None] + off + fb + ff, self._lo, self._hi))
+            look_bad |= sim.step(np.clip(target[None] + off[look] + fb + ff, self._lo, self._hi))
             scored = row
-        end_cost, error = self._cost(scored, mode.weights)
-        cost = (end_cost + mode.running * running
-                + mode.weights.effort * np.square(off).mean(-1))  # fmt: skip
+        end_cost, end_error = self._cost(scored, mode.weights, sim)
+        cost, error = np.full(K, np.inf), np.full(K, np.inf)
+        cost[look] = end_cost + mode.running * running[look] + effort[look]
+        error[look] = end_error
+        bad[look] = look_bad
         cost[bad] = np.inf
         return {"parent": parent, "dev": new_dev, "off": off, "acts": acts, "qpos": qpos,
                 "qvel": qvel, "body": body, "end_state": end_state, "cost": cost,

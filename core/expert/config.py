@@ -6,7 +6,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from retarget.kinds.base import PluginConfig
 
-ADDED_LATER: dict[str, object] = {"inverse_ff": 0.0, "inverse_support": False}
+ADDED_LATER: dict[str, object] = {"inverse_ff": 0.0, "inverse_support": False,
+                                      "lookahead_share": 1.0}
 """Planner fields added after expert directories were written, with the value that plans as
 before: a field at that value is left out of a directory's settings key, so a directory
 planned before the field existed still resumes."""
@@ -65,6 +66,11 @@ class ExpertConfig(PluginConfig):
     lookahead: int = Field(6, ge=0, le=72, description="control steps each sample is "
                            "continued past its segment (same offset) before it is scored: a "
                            "state that is about to fall scores badly before it falls")
+    lookahead_share: float = Field(1.0, gt=0, le=1, description="share of the samples "
+                                   "continued through the lookahead: those with the lowest "
+                                   "cost at their segment's end (never fewer than `beam`); "
+                                   "the rest are dropped unscored. The lookahead is most of a "
+                                   "segment's simulation, so 0.25 halves it")
     quiet: float = Field(0.0, ge=0, le=1, description="share of samples that add no new "
                          "noise to their parent's (decayed) offset")
     gain: float = Field(1.0, ge=0, le=10, description="feedback added to every action: gain "

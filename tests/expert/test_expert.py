@@ -278,3 +278,31 @@ def test_inverse_feedforward_reaches_the_targets_with_or_without_the_velocity_te
     off = BeamTracker(env, ExpertConfig(**SMALL, velocity_ff=0.0))
     off.track(0, seconds=0.3)
     assert not off._feedforward(row).any()
+
+
+def test_a_pruned_lookahead_simulates_fewer_samples_and_still_tracks(track) -> None:
+    """``lookahead_share`` continues only the samples with the lowest segment-end cost
+    through the lookahead (never fewer than ``beam``): its batch is that small, every sample
+    it drops has no cost and so never joins the beam, and the clip is still tracked."""
+    env, full = track
+    pruned = BeamTracker(env, ExpertConfig(**SMALL, lookahead_share=0.25))
+    assert pruned.look_sim.num_envs == 12 and pruned.sim.num_envs == 48
+    stepped = []
+    step = pruned.look_sim.step
+    pruned.look_sim.step = lambda a: stepped.append(len(a)) or step(a)
+    scored = []
+    segment = pruned._segment
+    pruned._segment = lambda *a: scored.append(segment(*a)) or scored[-1]
+    tr = pruned.track(0, seconds=1.0)
+    assert stepped and set(stepped) == {12}
+    looked = [int(np.isfinite(s["cost"]).sum()) for s in scored]
+    assert looked[-1] > 12  # the clip's last segment has nothing to look ahead to
+    assert max(looked[:-1]) <= 12 and min(looked) >= SMALL["beam"], looked
+    assert all(np.isfinite(s["cost"][s["order"]]).all() for s in scored)
+    m = tr.metrics()
+    assert m["success_clip"] and m["g_mpjpe_mm"] < 120, m
+    assert abs(m["mpjpe_mm"] - full.metrics()["mpjpe_mm"]) < 40
+    at_least_beam = BeamTracker(env, ExpertConfig(**SMALL, lookahead_share=0.01))
+    assert at_least_beam.look_sim.num_envs == SMALL["beam"]
+    plain = BeamTracker(env, ExpertConfig(**SMALL))
+    assert plain.look_sim is plain.sim  # the default looks ahead with every sample

@@ -139,7 +139,9 @@ def test_a_directory_planned_before_the_fields_existed_keeps_its_key() -> None:
     recipe = {"character": "human"}
     assert settings_key({"recipe": recipe, "planner": old}) == settings_key(
         {"recipe": recipe, "planner": planner})
+    changed = {"inverse_ff": 1.0, "inverse_support": True, "lookahead_share": 0.25}
+    assert set(changed) == set(ADDED_LATER)
     for field in ADDED_LATER:
-        on = {**planner, field: 1.0 if field == "inverse_ff" else True}
+        on = {**planner, field: changed[field]}
         assert settings_key({"recipe": recipe, "planner": on}) != settings_key(
             {"recipe": recipe, "planner": planner})
