@@ -12,6 +12,10 @@ ADDED_LATER: dict[str, object] = {"inverse_ff": 0.0, "inverse_support": False,
 before: a field at that value is left out of a directory's settings key, so a directory
 planned before the field existed still resumes."""
 
+BEAM_IN_ILQR_ADDED_LATER: dict[str, object] = {"lookahead_share": 1.0}
+"""The beam search's fields added after ``beam_ilqr`` directories were written (that
+planner records the beam's settings under ``beam``), with the value that plans as before."""
+
 ILQR_ADDED_LATER: dict[str, object] = {"relinearise": 1}
 """The same for the refinement's fields (``beam_ilqr``'s ``ilqr`` settings): a directory
 refined before chord rounds existed recorded no ``relinearise`` and refined as with 1."""

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from retarget.errors import RecipeError
-from retarget.expert.config import ADDED_LATER, ILQR_ADDED_LATER
+from retarget.expert.config import ADDED_LATER, BEAM_IN_ILQR_ADDED_LATER, ILQR_ADDED_LATER
 from retarget.kinds.track import Track
 
 VERSION = 1
@@ -51,14 +51,45 @@ def settings_key(header: Mapping[str, Any]) -> str:
     planners were plugins)."""
     planner = {k: v for k, v in dict(header["planner"]).items()
                if k not in ADDED_LATER or v != ADDED_LATER[k]}  # fmt: skip
-    if isinstance(planner.get("ilqr"), dict):
-        planner["ilqr"] = {k: v for k, v in planner["ilqr"].items()
-                           if k not in ILQR_ADDED_LATER or v != ILQR_ADDED_LATER[k]}  # fmt: skip
+    for part, later in (("ilqr", ILQR_ADDED_LATER), ("beam", BEAM_IN_ILQR_ADDED_LATER)):
+        if isinstance(planner.get(part), dict):
+            planner[part] = {k: v for k, v in planner[part].items()
+                             if k not in later or v != later[k]}  # fmt: skip
     decides: dict[str, Any] = {"recipe": header["recipe"], "planner": planner}
     if header.get("method", "beam") != "beam":
         decides["method"] = header["method"]
     blob = json.dumps(decides, sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+def _flat(tree: Any, prefix: str = "") -> dict[str, Any]:
+    if not isinstance(tree, Mapping):
+        return {prefix: tree}
+    out: dict[str, Any] = {}
+    for k, v in tree.items():
+        out.update(_flat(v, f"{prefix}.{k}" if prefix else str(k)))
+    return out
+
+
+def differences(old: Mapping[str, Any], new: Mapping[str, Any], limit: int = 6) -> list[str]:
+    """What a directory's header ``old`` recorded that ``new`` sets otherwise, as
+    ``planner.FIELD: OLD in the directory, NEW now`` (at most ``limit``); a planner field the
+    directory predates counts at the value it planned with."""
+    before = {f"planner.{k}": v for k, v in ADDED_LATER.items()}
+    before |= {f"planner.ilqr.{k}": v for k, v in ILQR_ADDED_LATER.items()}
+    before |= {f"planner.beam.{k}": v for k, v in BEAM_IN_ILQR_ADDED_LATER.items()}
+    a = _flat({"method": old.get("method", "beam"), "recipe": old.get("recipe"),
+               "planner": old.get("planner")})  # fmt: skip
+    b = _flat({"method": new.get("method", "beam"), "recipe": new.get("recipe"),
+               "planner": new.get("planner")})  # fmt: skip
+    missing = object()
+    lines = []
+    for key in sorted(set(a) | set(b)):
+        was, now = a.get(key, before.get(key, missing)), b.get(key, before.get(key, missing))
+        if was != now:
+            lines.append(f"{key}: {'(none)' if was is missing else json.dumps(was)} in the "
+                         f"directory, {'(none)' if now is missing else json.dumps(now)} now")
+    return lines[:limit] + ([f"and {len(lines) - limit} more"] if len(lines) > limit else [])
 
 
 def write_header(out: Path, header: dict[str, Any]) -> None:
@@ -71,9 +102,12 @@ def write_header(out: Path, header: dict[str, Any]) -> None:
     if file.exists():
         old = read_header(out)
         if old["key"] != header["key"]:
+            changed = differences(old, header)
             raise RecipeError(
-                "was planned with other recipe or planner settings",
-                file=str(file), hint="resume with the same settings, or use another --out",
+                "was planned with other recipe or planner settings"
+                + (f": {'; '.join(changed)}" if changed else ""),
+                file=str(file), hint="resume with the same settings (--planner KEY=VALUE, "
+                "--set PATH=VALUE), or use another --out",
             )
         return
     file.write_text(json.dumps(header, indent=2, sort_keys=True), encoding="utf-8")

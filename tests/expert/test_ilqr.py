@@ -209,3 +209,30 @@ def test_chord_rounds_still_lower_the_cost(planned) -> None:
     costs = [h["cost"] for h in chord.history]
     assert all(b <= a for a, b in itertools.pairwise(costs)), costs
     assert out.metrics()["mpjpe_mm"] < path.metrics()["mpjpe_mm"]
+
+
+def test_a_beam_field_added_later_keeps_refined_directories_resuming(tmp_path) -> None:
+    """``beam_ilqr`` records the beam's settings under ``beam``: a directory written before
+    ``lookahead_share`` existed keeps its key with the field at 1.0 (how it planned); another
+    value is another key, and resuming with it names the field and both values."""
+    from retarget.errors import RecipeError
+    from retarget.expert.store import write_header
+
+    beam = ExpertConfig().model_dump(mode="json")
+    ilqr = IlqrConfig().model_dump(mode="json")
+    before = {k: v for k, v in beam.items() if k != "lookahead_share"}
+
+    def header(b):
+        return {"recipe": {"character": "dino"}, "method": "beam_ilqr",
+                "planner": {"beam": b, "ilqr": ilqr}}  # fmt: skip
+
+    assert settings_key(header({**beam, "lookahead_share": 1.0})) == settings_key(header(before))
+    assert settings_key(header({**beam, "lookahead_share": 0.25})) != settings_key(header(before))
+    write_header(tmp_path, header(before))
+    write_header(tmp_path, header({**beam, "lookahead_share": 1.0}))  # resumes
+    with pytest.raises(RecipeError) as err:
+        write_header(tmp_path, header({**beam, "lookahead_share": 0.25, "samples": 256}))
+    text = str(err.value)
+    assert "planner.beam.lookahead_share: 1.0 in the directory, 0.25 now" in text, text
+    assert "planner.beam.samples: 512 in the directory, 256 now" in text, text
+    assert "expert.json" in text
