@@ -149,12 +149,14 @@ class ExpertCommand(Command):
         done = done_clips(out, key)
         taken: set[str] = set()
         jobs = []
+        planned = 0  # of these files, planned before with these settings
         for path in files:
             name = clip_name(path, taken)
             target = out / "motions" / f"{name}{path.suffix.lower()}"
             if not target.exists():
                 shutil.copyfile(path, target)
             if name in done:
+                planned += 1
                 continue
             jobs.append({
                 "recipe": args.recipe, "shorthands": shorthands, "assignments": args.assignments,
@@ -163,7 +165,7 @@ class ExpertCommand(Command):
                 "seconds": args.seconds, "threads": args.threads, "out": str(out), "key": key,
             })  # fmt: skip
         figures = dict(done)
-        console.print(f"{len(files)} clips: {len(done)} planned before, {len(jobs)} to plan "
+        console.print(f"{len(files)} clips: {planned} planned before, {len(jobs)} to plan "
                       f"into {out}")  # fmt: skip
         try:
             with Progress(console=console) as bar:

@@ -134,6 +134,13 @@ def test_cli_plans_resumes_and_a_student_clones_it(clip_file, tmp_path) -> None:
     other = _cli("expert", str(clip_file), "--out", str(out), "--planner", "samples=64",
                  cwd=tmp_path)  # fmt: skip
     assert other.returncode != 0 and "expert.json" in other.stderr
+    said = " ".join(other.stderr.split())
+    assert "planner.samples: 48 in the directory, 64 now" in said, other.stderr
+    second = tmp_path / "idle_again.bvh"
+    second.write_bytes(clip_file.read_bytes())
+    both = _cli("expert", str(second), str(clip_file), "--out", str(out), "--seconds", "0.5",
+                *small, cwd=tmp_path)  # fmt: skip
+    assert both.returncode == 0 and "2 clips: 1 planned before, 1 to plan" in both.stderr
     runs = tmp_path / "runs"
     train = _cli("train", "--sensors", "three_point", "--expert", str(out), "--steps", "512",
                  "--num-envs", "8", "--threads", "1", "--runs-dir", str(runs), cwd=tmp_path)
