@@ -70,11 +70,12 @@ class ExpertConfig(PluginConfig):
     lookahead: int = Field(6, ge=0, le=72, description="control steps each sample is "
                            "continued past its segment (same offset) before it is scored: a "
                            "state that is about to fall scores badly before it falls")
-    lookahead_share: float = Field(1.0, gt=0, le=1, description="share of the samples "
+    lookahead_share: float = Field(0.25, gt=0, le=1, description="share of the samples "
                                    "continued through the lookahead: those with the lowest "
                                    "cost at their segment's end (never fewer than `beam`); "
                                    "the rest are dropped unscored. The lookahead is most of a "
-                                   "segment's simulation, so 0.25 halves it")
+                                   "segment's simulation, so 0.25 halves it (1: every sample, "
+                                   "as directories planned before it existed)")
     quiet: float = Field(0.0, ge=0, le=1, description="share of samples that add no new "
                          "noise to their parent's (decayed) offset")
     gain: float = Field(1.0, ge=0, le=10, description="feedback added to every action: gain "

@@ -291,8 +291,9 @@ def test_a_pruned_lookahead_simulates_fewer_samples_and_still_tracks(track) -> N
     """``lookahead_share`` continues only the samples with the lowest segment-end cost
     through the lookahead (never fewer than ``beam``): its batch is that small, every sample
     it drops has no cost and so never joins the beam, and the clip is still tracked."""
-    env, full = track
-    pruned = BeamTracker(env, ExpertConfig(**SMALL, lookahead_share=0.25))
+    env, _ = track
+    full = BeamTracker(env, ExpertConfig(**SMALL, lookahead_share=1.0)).track(0, seconds=1.0)
+    pruned = BeamTracker(env, ExpertConfig(**SMALL))  # the default: a quarter
     assert pruned.look_sim.num_envs == 12 and pruned.sim.num_envs == 48
     stepped = []
     step = pruned.look_sim.step
@@ -311,5 +312,5 @@ def test_a_pruned_lookahead_simulates_fewer_samples_and_still_tracks(track) -> N
     assert abs(m["mpjpe_mm"] - full.metrics()["mpjpe_mm"]) < 40
     at_least_beam = BeamTracker(env, ExpertConfig(**SMALL, lookahead_share=0.01))
     assert at_least_beam.look_sim.num_envs == SMALL["beam"]
-    plain = BeamTracker(env, ExpertConfig(**SMALL))
-    assert plain.look_sim is plain.sim  # the default looks ahead with every sample
+    plain = BeamTracker(env, ExpertConfig(**SMALL, lookahead_share=1.0))
+    assert plain.look_sim is plain.sim  # every sample looks ahead

@@ -134,7 +134,7 @@ def test_a_directory_planned_before_the_fields_existed_keeps_its_key() -> None:
     from retarget.expert.config import ADDED_LATER
     from retarget.expert.store import settings_key
 
-    planner = ExpertConfig().model_dump(mode="json")
+    planner = ExpertConfig(**ADDED_LATER).model_dump(mode="json")
     old = {k: v for k, v in planner.items() if k not in ADDED_LATER}
     recipe = {"character": "human"}
     assert settings_key({"recipe": recipe, "planner": old}) == settings_key(
