@@ -6,8 +6,9 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from retarget.kinds.base import PluginConfig
 
-ADDED_LATER: dict[str, object] = {"inverse_ff": 0.0, "inverse_support": False,
-                                      "lookahead_share": 1.0}
+ADDED_LATER: dict[str, object] = {
+    "inverse_ff": 0.0, "inverse_support": False, "lookahead_share": 1.0,
+}
 """Planner fields added after expert directories were written, with the value that plans as
 before: a field at that value is left out of a directory's settings key, so a directory
 planned before the field existed still resumes."""

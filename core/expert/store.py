@@ -63,6 +63,7 @@ def settings_key(header: Mapping[str, Any]) -> str:
 
 
 def _flat(tree: Any, prefix: str = "") -> dict[str, Any]:
+    """Nested settings as ``{"a.b.c": value}``, so two headers compare field by field."""
     if not isinstance(tree, Mapping):
         return {prefix: tree}
     out: dict[str, Any] = {}
