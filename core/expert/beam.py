@@ -19,8 +19,8 @@ back with the step and no per-sample loop runs in Python.
 A sample is scored after a lookahead past its segment, so that a state about to fall scores
 badly before it falls. The lookahead was two thirds of the search's simulation; only the
 samples closest to the reference at their segment's end (``lookahead_share``, a quarter by
-default) are stepped through it, in a second, smaller batch: the others would not have been
-kept anyway, and on held-out clips the Dino's search costs a fifth less for the same errors
+default) are stepped through it, in a second, smaller batch: the others are the least likely to
+be kept, and on held-out clips the Dino's search costs a fifth less for the same errors
 (``benchmarks/results/expert_lookahead_share_2026-12-07.md``).
 """
 
