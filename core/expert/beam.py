@@ -151,7 +151,7 @@ class BeamTracker:
         reference row ``row`` and its mean world distance of the bodies (m)."""
         ref, lay = self.env.reference, self.env.layout
         w = w or self.config.weights
-        sim = sim or self.sim
+        sim = self.sim if sim is None else sim
         s = sim.state
         bp, rb = s.body_pos.numpy(), ref.arrays["body_pos"][row].numpy()
         body = np.linalg.norm(bp - rb, axis=-1).mean(-1)

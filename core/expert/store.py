@@ -44,17 +44,24 @@ def clip_name(path: Path, taken: set[str]) -> str:
     return name
 
 
+LATER_BY_PART: dict[str | None, dict[str, object]] = {
+    None: ADDED_LATER, "ilqr": ILQR_ADDED_LATER, "beam": BEAM_IN_ILQR_ADDED_LATER,
+}
+"""Fields added later, by where a header's planner settings hold them (None: the top level,
+``beam``'s own; ``ilqr`` and ``beam``: ``beam_ilqr``'s parts)."""
+
+
 def settings_key(header: Mapping[str, Any]) -> str:
     """Hash of what decides a clip's plan (recipe, planner and its settings); planner fields
     of :data:`ADDED_LATER` (the refinement's: ``ILQR_ADDED_LATER``) at their old behaviour's
     value are left out, and so is the planner when it is ``beam`` (directories written before
     planners were plugins)."""
-    planner = {k: v for k, v in dict(header["planner"]).items()
-               if k not in ADDED_LATER or v != ADDED_LATER[k]}  # fmt: skip
-    for part, later in (("ilqr", ILQR_ADDED_LATER), ("beam", BEAM_IN_ILQR_ADDED_LATER)):
-        if isinstance(planner.get(part), dict):
-            planner[part] = {k: v for k, v in planner[part].items()
-                             if k not in later or v != later[k]}  # fmt: skip
+    planner = dict(header["planner"])
+    for part, later in LATER_BY_PART.items():
+        node = planner if part is None else planner.get(part)
+        if isinstance(node, dict):
+            kept = {k: v for k, v in node.items() if k not in later or v != later[k]}
+            planner = kept if part is None else {**planner, part: kept}
     decides: dict[str, Any] = {"recipe": header["recipe"], "planner": planner}
     if header.get("method", "beam") != "beam":
         decides["method"] = header["method"]
@@ -76,9 +83,8 @@ def differences(old: Mapping[str, Any], new: Mapping[str, Any], limit: int = 6) 
     """What a directory's header ``old`` recorded that ``new`` sets otherwise, as
     ``planner.FIELD: OLD in the directory, NEW now`` (at most ``limit``); a planner field the
     directory predates counts at the value it planned with."""
-    before = {f"planner.{k}": v for k, v in ADDED_LATER.items()}
-    before |= {f"planner.ilqr.{k}": v for k, v in ILQR_ADDED_LATER.items()}
-    before |= {f"planner.beam.{k}": v for k, v in BEAM_IN_ILQR_ADDED_LATER.items()}
+    before = {".".join(filter(None, ("planner", part, k))): v
+              for part, later in LATER_BY_PART.items() for k, v in later.items()}
     a = _flat({"method": old.get("method", "beam"), "recipe": old.get("recipe"),
                "planner": old.get("planner")})  # fmt: skip
     b = _flat({"method": new.get("method", "beam"), "recipe": new.get("recipe"),

@@ -182,19 +182,22 @@ def test_the_path_feedback_gains_bring_a_pushed_body_back(planned) -> None:
         closed["deviation"][:, -1], open_loop["deviation"][:, -1])
 
 
+def _header(beam: dict, ilqr: dict) -> dict:
+    """An expert directory's header for ``beam_ilqr`` with these beam and refinement settings."""
+    return {"recipe": {"character": "human"}, "method": "beam_ilqr",
+            "planner": {"beam": beam, "ilqr": ilqr}}  # fmt: skip
+
+
 def test_a_refinement_field_added_later_keeps_old_directories_resuming() -> None:
     """``relinearise`` at 1 (how every directory was refined before it existed) leaves the
     settings key as it was; another value (the default now) is another key."""
     beam = ExpertConfig().model_dump(mode="json")
     ilqr = IlqrConfig().model_dump(mode="json")
     old = {k: v for k, v in ilqr.items() if k != "relinearise"}
-
-    def header(i):
-        return {"recipe": {"character": "human"}, "method": "beam_ilqr",
-                "planner": {"beam": beam, "ilqr": i}}  # fmt: skip
-
-    assert settings_key(header({**ilqr, "relinearise": 1})) == settings_key(header(old))
-    assert settings_key(header({**ilqr, "relinearise": 2})) != settings_key(header(old))
+    assert settings_key(_header(beam, {**ilqr, "relinearise": 1})) == settings_key(
+        _header(beam, old))
+    assert settings_key(_header(beam, {**ilqr, "relinearise": 2})) != settings_key(
+        _header(beam, old))
 
 
 def test_chord_rounds_still_lower_the_cost(planned) -> None:
@@ -224,8 +227,7 @@ def test_a_beam_field_added_later_keeps_refined_directories_resuming(tmp_path) -
     before = {k: v for k, v in beam.items() if k != "lookahead_share"}
 
     def header(b):
-        return {"recipe": {"character": "dino"}, "method": "beam_ilqr",
-                "planner": {"beam": b, "ilqr": ilqr}}  # fmt: skip
+        return _header(b, ilqr)
 
     assert settings_key(header({**beam, "lookahead_share": 1.0})) == settings_key(header(before))
     assert settings_key(header({**beam, "lookahead_share": 0.25})) != settings_key(header(before))
