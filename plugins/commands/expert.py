@@ -60,8 +60,16 @@ def plan_clip(job: dict[str, Any]) -> dict[str, Any]:
     assert isinstance(planner, Planner), f"{job['method']} is registered as a planner"
     track = planner.track(env, 0, seconds=job["seconds"], threads=job["threads"],
                           progress=job.get("progress"))  # fmt: skip
-    out = Path(job["out"])
-    return write_track(out, job["name"], track, {"key": job["key"], "source": job["path"]})
+    from retarget.eval.reference_dynamics import over_gravity_share
+
+    start = int(env.library.start[0])
+    reference = env.reference.qpos64[start : start + track.frames]
+    meta = {
+        "key": job["key"],
+        "source": job["path"],
+        "reference_over_gravity": over_gravity_share(env.sim.model, reference, track.fps),
+    }
+    return write_track(Path(job["out"]), job["name"], track, meta)
 
 
 class ExpertCommand(Command):
@@ -207,8 +215,12 @@ class ExpertCommand(Command):
 
 def _line(name: str, fig: dict[str, Any]) -> str:
     ok = "ok" if fig["success_clip"] else f"failed at {fig['failed_at_s']:.1f} s"
-    return (f"{name}: {ok}, MPJPE {fig['mpjpe_mm']:.0f} mm, G-MPJPE {fig['g_mpjpe_mm']:.0f} mm, "
+    line = (f"{name}: {ok}, MPJPE {fig['mpjpe_mm']:.0f} mm, G-MPJPE {fig['g_mpjpe_mm']:.0f} mm, "
             f"{fig['cpu_s_per_motion_s']:.1f} CPU-s per motion-s")
+    over = fig.get("reference_over_gravity")  # absent from clips planned by older versions
+    if over:
+        line += f"; its reference falls faster than gravity in {100 * over:.0f}% of frames"
+    return line
 
 
 @retarget.hookimpl

@@ -1,0 +1,71 @@
+"""The reference-dynamics check: a centre of mass that falls faster than gravity is counted,
+one that falls at gravity is not, scene props do not count, and retargeting a person's run to
+the larger Dino asks for more of it than the same run on the human."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from retarget.eval.reference_dynamics import com_heights, over_gravity_share
+from tests.helpers import SHARED_MOCAP
+
+BODY_AND_PROP = """
+<mujoco>
+  <worldbody>
+    <body name="character" pos="0 0 1">
+      <freejoint/>
+      <geom type="sphere" size="0.1" mass="70"/>
+      <body name="arm" pos="0 0 0.5"><geom type="sphere" size="0.05" mass="10"/></body>
+    </body>
+    <body name="prop" pos="3 0 5"><joint type="slide" axis="0 0 1"/>
+      <geom type="box" size="0.5 0.5 0.5" mass="500"/></body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def _falling(model: mujoco.MjModel, g_multiple: float, frames: int = 40, fps: float = 30.0):
+    t = np.arange(frames) / fps
+    qpos = np.tile(model.qpos0[:7], (frames, 1))
+    qpos[:, 2] = 10.0 - 0.5 * g_multiple * 9.81 * t**2
+    return qpos
+
+
+def test_falling_at_gravity_is_possible_and_faster_is_not() -> None:
+    model = mujoco.MjModel.from_xml_string(BODY_AND_PROP)
+    qpos = _falling(model, 1.0)
+    heights = com_heights(model, qpos)
+    # the character's own centre of mass (body + arm), never the 500 kg prop's
+    assert heights[0] == pytest.approx(10.0 + 0.5 * 10 / 80, abs=1e-9)
+    assert over_gravity_share(model, qpos, 30.0) == 0.0
+    assert over_gravity_share(model, _falling(model, 1.5), 30.0) == 1.0
+    assert over_gravity_share(model, _falling(model, 1.1), 30.0) == 0.0  # inside the margin
+    assert over_gravity_share(model, _falling(model, 1.1), 30.0, margin=1.05) == 1.0
+    assert over_gravity_share(model, qpos[:4], 30.0) == 0.0  # too short to tell
+    with pytest.raises(ValueError, match="qpos must be"):
+        com_heights(model, np.zeros((3, model.nq + 1)))
+
+
+NO_MOCAP = "shared mocap clips not found (set RETARGET_SHARED_DATA)"
+
+
+@pytest.mark.skipif(SHARED_MOCAP is None, reason=NO_MOCAP)
+def test_a_run_retargeted_to_the_dino_asks_its_body_to_fall_faster_than_the_humans() -> None:
+    from retarget import load_plugins
+    from retarget.env.build import env_from_recipe
+    from retarget.recipe import load
+
+    registry = load_plugins(strict=False)
+    share = {}
+    for kind in ("run_normal_040", "walk_normal_020"):
+        for character in ("human", "dino"):
+            clip = SHARED_MOCAP / f"bandai_d2_{kind}.bvh"
+            recipe = load(None, registry, shorthands={"character": character, "scene": None,
+                                                      "motions": str(clip)})  # fmt: skip
+            env = env_from_recipe(recipe, registry=registry, num_envs=1, threads=1)
+            fps = 1.0 / env.sim.settings.control_dt
+            share[kind, character] = over_gravity_share(env.sim.model, env.reference.qpos64, fps)
+    assert share["walk_normal_020", "human"] == share["walk_normal_020", "dino"] == 0.0
+    assert share["run_normal_040", "dino"] > 1.5 * share["run_normal_040", "human"] > 0.0
