@@ -21,6 +21,7 @@ from retarget.kinds.lookup import PluginLookup
 from retarget.motion.clip import MotionClip
 from retarget.motion.clip_weights import clip_weights
 from retarget.motion.level_feet import with_level_feet
+from retarget.motion.mirror import mirror
 from retarget.motion.rest_ends import with_rest_ends
 from retarget.motion.sources import load_motions
 from retarget.recipe import ResolvedRecipe
@@ -110,6 +111,8 @@ def env_from_recipe(
             clips = with_level_feet(clips)
         if own and recipe.motions.rest_ends:
             clips = with_rest_ends(clips)
+        if own and recipe.motions.mirror:
+            clips = [*clips, *(mirror(c) for c in clips)]
         if own and weighted and recipe.motions.weights:
             try:
                 weights = clip_weights(clips, recipe.motions.weights)

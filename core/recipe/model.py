@@ -63,6 +63,12 @@ class MotionsSection(Strict):
         "a stop (its ends time-warped, retarget.motion.rest_ends): takes cut mid-stride have "
         "neither, and a live user does both",
     )
+    mirror: bool = Field(
+        False,
+        description="also train on each clip mirrored left to right (retarget.motion.mirror): "
+        "twice the motion at no cost, and a performer's own asymmetries (a favoured side, a "
+        "limp) are no longer all a policy has seen of a motion",
+    )
     level_feet: bool = Field(
         True,
         description="turn each foot's frame level where it is planted (retarget.motion."
