@@ -219,7 +219,7 @@ def _line(name: str, fig: dict[str, Any]) -> str:
             f"{fig['cpu_s_per_motion_s']:.1f} CPU-s per motion-s")
     over = fig.get("reference_over_gravity")  # absent from clips planned by older versions
     if over:
-        line += f"; its reference falls faster than gravity in {100 * over:.0f}% of frames"
+        line += f"; its reference drops the body faster than 1.2 g in {100 * over:.0f}% of frames"
     return line
 
 
