@@ -60,14 +60,15 @@ def plan_clip(job: dict[str, Any]) -> dict[str, Any]:
     assert isinstance(planner, Planner), f"{job['method']} is registered as a planner"
     track = planner.track(env, 0, seconds=job["seconds"], threads=job["threads"],
                           progress=job.get("progress"))  # fmt: skip
-    from retarget.eval.reference_dynamics import over_gravity_share
+    from retarget.eval.reference_dynamics import drop_beyond_fall_per_second
 
     start = int(env.library.start[0])
     reference = env.reference.qpos64[start : start + track.frames]
     meta = {
         "key": job["key"],
         "source": job["path"],
-        "reference_over_gravity": over_gravity_share(env.sim.model, reference, track.fps),
+        "reference_drop_beyond_fall_mm_s": 1000.0
+        * drop_beyond_fall_per_second(env.sim.model, reference, track.fps),
     }
     return write_track(Path(job["out"]), job["name"], track, meta)
 
@@ -217,9 +218,9 @@ def _line(name: str, fig: dict[str, Any]) -> str:
     ok = "ok" if fig["success_clip"] else f"failed at {fig['failed_at_s']:.1f} s"
     line = (f"{name}: {ok}, MPJPE {fig['mpjpe_mm']:.0f} mm, G-MPJPE {fig['g_mpjpe_mm']:.0f} mm, "
             f"{fig['cpu_s_per_motion_s']:.1f} CPU-s per motion-s")
-    over = fig.get("reference_over_gravity")  # absent from clips planned by older versions
-    if over:
-        line += f"; its reference drops the body faster than 1.2 g in {100 * over:.0f}% of frames"
+    drop = fig.get("reference_drop_beyond_fall_mm_s")  # absent from clips planned before
+    if drop:
+        line += f"; its reference drops {drop:.0f} mm per second beyond free fall"
     return line
 
 

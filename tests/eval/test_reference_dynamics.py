@@ -1,6 +1,6 @@
-"""The reference-dynamics check: a centre of mass that falls faster than gravity is counted,
-one that falls at gravity is not, scene props do not count, and retargeting a person's run to
-the larger Dino asks for more of it than the same run on the human."""
+"""The reference-dynamics check: a centre of mass that falls faster than gravity drops the
+distance free fall would not, one that falls at gravity drops none, scene props do not count,
+and a person's run retargeted to the larger Dino asks for more of it than on the human."""
 
 from __future__ import annotations
 
@@ -8,7 +8,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from retarget.eval.reference_dynamics import com_heights, over_gravity_share
+from retarget.eval.reference_dynamics import (
+    com_heights,
+    drop_beyond_fall,
+    drop_beyond_fall_per_second,
+)
 from tests.helpers import SHARED_MOCAP
 
 BODY_AND_PROP = """
@@ -39,11 +43,18 @@ def test_falling_at_gravity_is_possible_and_faster_is_not() -> None:
     heights = com_heights(model, qpos)
     # the character's own centre of mass (body + arm), never the 500 kg prop's
     assert heights[0] == pytest.approx(10.0 + 0.5 * 10 / 80, abs=1e-9)
-    assert over_gravity_share(model, qpos, 30.0) == 0.0
-    assert over_gravity_share(model, _falling(model, 1.5), 30.0) == 1.0
-    assert over_gravity_share(model, _falling(model, 1.1), 30.0) == 0.0  # inside the margin
-    assert over_gravity_share(model, _falling(model, 1.1), 30.0, margin=1.05) == 1.0
-    assert over_gravity_share(model, qpos[:4], 30.0) == 0.0  # too short to tell
+    assert drop_beyond_fall_per_second(model, qpos, 30.0) == pytest.approx(0.0, abs=1e-9)
+    # half a g too much for the whole clip: 0.5 * (g / 2) * t^2 over its 38 second differences
+    t = 38 / 30.0
+    expected = 0.5 * (0.5 * 9.81) * t**2 / (39 / 30.0)
+    fast = drop_beyond_fall_per_second(model, _falling(model, 1.5), 30.0)
+    assert fast == pytest.approx(expected, rel=0.05)
+    # a landing ends the stretch: what follows (held still) adds nothing
+    z = 10.0 - 0.5 * 1.5 * 9.81 * (np.arange(40) / 30.0) ** 2
+    landed = np.concatenate([z[:20], np.full(20, z[19])])
+    assert drop_beyond_fall(landed, 30.0) == pytest.approx(drop_beyond_fall(z[:20], 30.0))
+    assert 0.0 < drop_beyond_fall(z[:20], 30.0) < drop_beyond_fall(z, 30.0)
+    assert drop_beyond_fall_per_second(model, qpos[:1], 30.0) == 0.0
     with pytest.raises(ValueError, match="qpos must be"):
         com_heights(model, np.zeros((3, model.nq + 1)))
 
@@ -58,7 +69,7 @@ def test_a_run_retargeted_to_the_dino_asks_its_body_to_fall_faster_than_the_huma
     from retarget.recipe import load
 
     registry = load_plugins(strict=False)
-    share = {}
+    drop = {}
     for kind in ("run_normal_040", "walk_normal_020"):
         for character in ("human", "dino"):
             clip = SHARED_MOCAP / f"bandai_d2_{kind}.bvh"
@@ -66,6 +77,7 @@ def test_a_run_retargeted_to_the_dino_asks_its_body_to_fall_faster_than_the_huma
                                                       "motions": str(clip)})  # fmt: skip
             env = env_from_recipe(recipe, registry=registry, num_envs=1, threads=1)
             fps = 1.0 / env.sim.settings.control_dt
-            share[kind, character] = over_gravity_share(env.sim.model, env.reference.qpos64, fps)
-    assert share["walk_normal_020", "human"] == share["walk_normal_020", "dino"] == 0.0
-    assert share["run_normal_040", "dino"] > 1.5 * share["run_normal_040", "human"] > 0.0
+            drop[kind, character] = drop_beyond_fall_per_second(
+                env.sim.model, env.reference.qpos64, fps)
+    assert drop["walk_normal_020", "human"] == drop["walk_normal_020", "dino"] == 0.0
+    assert drop["run_normal_040", "dino"] > 1.5 * drop["run_normal_040", "human"] > 0.0

@@ -115,7 +115,7 @@ def test_cli_plans_resumes_and_a_student_clones_it(clip_file, tmp_path) -> None:
     assert first.returncode == 0, first.stderr
     report = json.loads((out / "report.json").read_text())
     assert report["summary"]["clips"] == 1 and "idle" in report["clips"]
-    assert report["clips"]["idle"]["reference_over_gravity"] == 0.0  # standing asks no fall
+    assert report["clips"]["idle"]["reference_drop_beyond_fall_mm_s"] == 0.0  # standing still
     assert "success_clip=1.000" in first.stdout
     picture = subprocess.run(
         [sys.executable, str(REPO / "benchmarks" / "expert_picture.py"), str(out), "idle",
