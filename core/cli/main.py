@@ -17,6 +17,7 @@ from collections.abc import Sequence
 
 import retarget
 from retarget.cli import (
+    average_cmd,
     eval_cmd,
     export_cmd,
     play_cmd,
@@ -81,6 +82,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     eval_cmd.add_parser(sub)
     play_cmd.add_parser(sub)
     export_cmd.add_parser(sub)
+    average_cmd.add_parser(sub)
     serve_cmd.add_parser(sub)
     stream_cmd.add_parser(sub)
     view_cmd.add_parser(sub)
