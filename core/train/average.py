@@ -2,7 +2,7 @@
 
 Fine-tuning a policy by DAgger or PPO moves its weights by noisy steps, and a single
 checkpoint is one draw of that noise: measured on motions it never saw, the headset-only
-student's checkpoints ten iterations apart lose 0 to 4 of 24 held-out walks. The mean of the
+student's checkpoints fifty iterations apart lose 0 to 5 of 24 held-out walks. The mean of the
 weights over the run's tail (Polyak averaging, stochastic weight averaging) sits in the middle
 of the region those steps wander over and behaves like the run's trend rather than one draw
 (the same student: 24 of 24 from the last 20 checkpoints of two stretches of its run).
