@@ -44,31 +44,52 @@ def run_checkpoints(run: Path) -> list[Path]:
     return [file for _, file in sorted(numbered)]
 
 
-def _mean(values: Sequence[Any], files: Sequence[Path], where: str) -> Any:
-    first = values[-1]
-    if isinstance(first, dict):
-        for v, f in zip(values, files, strict=True):
-            if not isinstance(v, dict) or v.keys() != first.keys():
-                raise RetargetError(f"'{where}' holds other entries than in {files[-1].name}",
-                                    file=str(f), hint="average checkpoints of one run")  # fmt: skip
-        return type(first)((k, _mean([v[k] for v in values], files, f"{where}.{k}"))
-                           for k in first)  # fmt: skip
-    if isinstance(first, torch.Tensor) and first.is_floating_point():
-        for v, f in zip(values, files, strict=True):
-            if not isinstance(v, torch.Tensor) or v.shape != first.shape:
-                raise RetargetError(f"'{where}' has another shape than in {files[-1].name}",
-                                    file=str(f), hint="average checkpoints of one run")  # fmt: skip
-        return torch.stack([v.double() for v in values]).mean(0).to(first.dtype)
-    return first
+def _add(total: Any, value: Any, file: Path, where: str) -> Any:
+    """``total`` (a running sum: floating tensors in float64) plus ``value``, one checkpoint's
+    entry; other leaves take ``value``'s (so counters end as the newest checkpoint's)."""
+    if isinstance(total, dict):
+        if not isinstance(value, dict) or value.keys() != total.keys():
+            raise RetargetError(f"'{where}' holds other entries than in the checkpoints before",
+                                file=str(file), hint="average checkpoints of one run")  # fmt: skip
+        return type(value)((k, _add(total[k], value[k], file, f"{where}.{k}")) for k in value)
+    if isinstance(total, torch.Tensor) and total.is_floating_point():
+        if not isinstance(value, torch.Tensor) or value.shape != total.shape:
+            raise RetargetError(f"'{where}' has another shape than in the checkpoints before",
+                                file=str(file), hint="average checkpoints of one run")  # fmt: skip
+        return total + value.double()
+    return value
+
+
+def _divide(total: Any, like: Any, count: int) -> Any:
+    if isinstance(total, dict):
+        return type(total)((k, _divide(total[k], like[k], count)) for k in total)
+    if isinstance(total, torch.Tensor) and total.is_floating_point():
+        return (total / count).to(like.dtype)
+    return total
+
+
+def _as_double(value: Any) -> Any:
+    if isinstance(value, dict):
+        return type(value)((k, _as_double(v)) for k, v in value.items())
+    if isinstance(value, torch.Tensor) and value.is_floating_point():
+        return value.double()
+    return value
 
 
 def average_state(files: Sequence[Path]) -> dict[str, Any]:
-    """The policy-only state whose floating tensors are the means over ``files``."""
+    """The policy-only state whose floating tensors are the means over ``files``, read one at
+    a time (memory of two checkpoints, however many are averaged)."""
     if not files:
         raise RetargetError("no checkpoints to average")
-    states = [policy_only(load_checkpoint(f)) for f in files]
-    return {"algorithm": _mean([s["algorithm"] for s in states], files, "algorithm"),
-            "progress": states[-1].get("progress", {})}  # fmt: skip
+    total: Any = None
+    newest: dict[str, Any] = {}
+    for file in files:
+        newest = policy_only(load_checkpoint(file))
+        algorithm = newest["algorithm"]
+        total = _as_double(algorithm) if total is None else _add(total, algorithm, file,
+                                                                 "algorithm")  # fmt: skip
+    return {"algorithm": _divide(total, newest["algorithm"], len(files)),
+            "progress": newest.get("progress", {})}  # fmt: skip
 
 
 def average_run(run: str | Path, out: str | Path, last: int) -> Path:

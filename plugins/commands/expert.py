@@ -60,7 +60,7 @@ def plan_clip(job: dict[str, Any]) -> dict[str, Any]:
     assert isinstance(planner, Planner), f"{job['method']} is registered as a planner"
     track = planner.track(env, 0, seconds=job["seconds"], threads=job["threads"],
                           progress=job.get("progress"))  # fmt: skip
-    from retarget.eval.reference_dynamics import drop_beyond_fall_per_second
+    from retarget.expert.reference_dynamics import drop_beyond_fall_per_second
 
     start = int(env.library.start[0])
     reference = env.reference.qpos64[start : start + track.frames]

@@ -68,5 +68,5 @@ def test_checkpoints_of_other_networks_are_refused_naming_the_file(tmp_path: Pat
     wide = _train(tmp_path, "wide", TINY.replace("actor_hidden: [32]", "actor_hidden: [48]"), 1)
     other = run_checkpoints(wide)[-1]
     with pytest.raises(RetargetError, match="another shape") as err:
-        average_state([other, run_checkpoints(small)[-1]])
+        average_state([run_checkpoints(small)[-1], other])
     assert str(other) in str(err.value)

@@ -7,13 +7,13 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from helpers import SHARED_MOCAP
 
-from retarget.eval.reference_dynamics import (
+from retarget.expert.reference_dynamics import (
     com_heights,
     drop_beyond_fall,
     drop_beyond_fall_per_second,
 )
-from tests.helpers import SHARED_MOCAP
 
 BODY_AND_PROP = """
 <mujoco>
