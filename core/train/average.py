@@ -16,9 +16,8 @@ tensor has one shape; anything else is an error naming the file.
 from __future__ import annotations
 
 import json
-import re
 import shutil
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -27,21 +26,12 @@ import torch
 from retarget.errors import RetargetError
 from retarget.train.checkpoint import load_checkpoint, save_checkpoint
 from retarget.train.package_model import policy_only
-from retarget.train.run_dir import CHECKPOINTS, LOCK, resolve_run
+from retarget.train.run_dir import CHECKPOINTS, LOCK, resolve_run, run_checkpoints
 
 AVERAGED_FROM = "averaged_from.json"
 """In the new run's directory: the run and checkpoint files its weights are the mean of."""
 KEEP = ("train_settings.json", "metrics.csv", "init_from.txt")
 """Files of the source run copied beside the lock (a card's samples and CPU-hours read them)."""
-
-
-def run_checkpoints(run: Path) -> list[Path]:
-    """The run's numbered checkpoint files, oldest first."""
-    numbered = []
-    for file in (run / CHECKPOINTS).glob("ckpt-*.pt"):
-        if found := re.fullmatch(r"ckpt-(\d+)\.pt", file.name):
-            numbered.append((int(found.group(1)), file))
-    return [file for _, file in sorted(numbered)]
 
 
 def _add(total: Any, value: Any, file: Path, where: str) -> Any:
@@ -60,20 +50,14 @@ def _add(total: Any, value: Any, file: Path, where: str) -> Any:
     return value
 
 
-def _divide(total: Any, like: Any, count: int) -> Any:
-    if isinstance(total, dict):
-        return type(total)((k, _divide(total[k], like[k], count)) for k in total)
-    if isinstance(total, torch.Tensor) and total.is_floating_point():
-        return (total / count).to(like.dtype)
-    return total
-
-
-def _as_double(value: Any) -> Any:
-    if isinstance(value, dict):
-        return type(value)((k, _as_double(v)) for k, v in value.items())
-    if isinstance(value, torch.Tensor) and value.is_floating_point():
-        return value.double()
-    return value
+def _floats(tree: Any, fn: Callable[[torch.Tensor, torch.Tensor], torch.Tensor],
+            like: Any) -> Any:  # fmt: skip
+    """``tree`` with ``fn(tensor, like's tensor)`` applied to its floating tensors."""
+    if isinstance(tree, dict):
+        return type(tree)((k, _floats(v, fn, like[k])) for k, v in tree.items())
+    if isinstance(tree, torch.Tensor) and tree.is_floating_point():
+        return fn(tree, like)
+    return tree
 
 
 def average_state(files: Sequence[Path]) -> dict[str, Any]:
@@ -86,9 +70,12 @@ def average_state(files: Sequence[Path]) -> dict[str, Any]:
     for file in files:
         newest = policy_only(load_checkpoint(file))
         algorithm = newest["algorithm"]
-        total = _as_double(algorithm) if total is None else _add(total, algorithm, file,
-                                                                 "algorithm")  # fmt: skip
-    return {"algorithm": _divide(total, newest["algorithm"], len(files)),
+        if total is None:
+            total = _floats(algorithm, lambda t, _: t.double(), algorithm)
+        else:
+            total = _add(total, algorithm, file, "algorithm")
+    mean = _floats(total, lambda t, like: (t / len(files)).to(like.dtype), newest["algorithm"])
+    return {"algorithm": mean,
             "progress": newest.get("progress", {})}  # fmt: skip
 
 

@@ -98,6 +98,15 @@ def resolve_run(path: str | Path) -> Path:
     return p
 
 
+def run_checkpoints(run: Path) -> list[Path]:
+    """The run's numbered checkpoint files (``ckpt-N.pt``), oldest first."""
+    numbered = []
+    for file in (run / CHECKPOINTS).glob("ckpt-*.pt"):
+        if found := re.fullmatch(r"ckpt-(\d+)\.pt", file.name):
+            numbered.append((int(found.group(1)), file))
+    return [file for _, file in sorted(numbered)]
+
+
 def latest_checkpoint(run: Path) -> Path:
     """The newest checkpoint file of a run: the one ``checkpoints/CURRENT`` names when there
     is one, else the highest numbered."""
@@ -110,7 +119,7 @@ def latest_checkpoint(run: Path) -> Path:
                 file=str(marker),
             )
         return run / CHECKPOINTS / name
-    files = sorted((run / CHECKPOINTS).glob("ckpt-*.pt"))
+    files = run_checkpoints(run)
     if not files:
         raise RetargetError("run has no checkpoint yet", file=str(run / CHECKPOINTS))
     return files[-1]

@@ -15,9 +15,9 @@ from helpers import TINY
 from retarget.errors import RetargetError
 from retarget.recipe import load
 from retarget.registry.loader import load_plugins
-from retarget.train.average import average_run, average_state, run_checkpoints
+from retarget.train.average import average_run, average_state
 from retarget.train.checkpoint import load_checkpoint
-from retarget.train.run_dir import new_run_dir
+from retarget.train.run_dir import new_run_dir, run_checkpoints
 from retarget.train.runner import Budget, Trainer
 
 SAMPLES = 4 * 8  # num_envs x rollout_steps of the tiny recipe
