@@ -31,6 +31,7 @@ from retarget.learn.pose_samples import (
     PoseTargets,
     forward_kinematics,
     pose_targets,
+    reads_controllers,
     sensor_inputs,
     sixd_to_matrix,
 )
@@ -143,7 +144,8 @@ class EstimatorSettings:
     input_noise: float = 0.0
     weight_decay: float = 0.0
     lost_controllers: float = 0.0
-    reach: bool = False  # wrists onto the controllers by IK when estimating (reach.py)
+    reach: bool = False  # wrists onto the controllers by IK when estimating (reach.py),
+    # where the sensors read the controllers
 
 
 class EstimatorLearner:
@@ -153,6 +155,8 @@ class EstimatorLearner:
         self.env, self.settings, self.generator = env, settings, generator
         probe, _ = sensor_inputs(env, env.library.start[:1].clone())
         self.obs_dim = int(probe.shape[1])
+        self.reach = settings.reach and reads_controllers(env)
+        """Whether estimates reach the controllers (asked for, and the inputs have them)."""
         self.net = PoseNet(self.obs_dim, settings.hidden)
         self.optimizer = torch.optim.AdamW(
             self.net.parameters(), lr=settings.lr, weight_decay=settings.weight_decay
@@ -221,7 +225,7 @@ class EstimatorLearner:
         """The prediction at library ``rows`` (causal: only the window's devices)."""
         inputs, hf = sensor_inputs(self.env, rows)
         out = PoseNet.split(self.net.eval()(inputs))
-        if self.settings.reach:
+        if self.reach:
             out = self._reach(out, rows, hf)
         return out, hf
 
@@ -234,11 +238,10 @@ class EstimatorLearner:
 
         lib = self.env.library
         clip = torch.searchsorted(lib.start, rows, right=True) - 1
-        heights = lib.heights[clip].float()
         ctrl = lib.devices[rows][:, 1:3]  # (B, 2, 7) world
         ctrl = torch.cat([hf.points_in(ctrl[..., :3]), hf.quat_in_many(ctrl[..., 3:7])], -1)
-        wrist_pos, wrist_rot = wrist_targets(ctrl, heights)
-        local = reach(out.root_pos, out.matrices, heights, wrist_pos, wrist_rot)
+        wrist_pos, wrist_rot = wrist_targets(ctrl, lib.heights[clip].float())
+        local = reach(out.root_pos, out.matrices, lib.bones[clip].float(), wrist_pos, wrist_rot)
         return replace(out, rot6d=matrix_to_6d(local))
 
     def warm_start(self, state: Mapping[str, Any]) -> None:

@@ -66,8 +66,17 @@ def forward_kinematics(
 def forward_kinematics_globals(
     root_pos: torch.Tensor, local: torch.Tensor, heights: torch.Tensor
 ) -> tuple[torch.Tensor, list[torch.Tensor]]:
-    """Joint positions ``(B, J, 3)`` and each joint's global rotation matrix ``(B, 3, 3)``."""
-    offsets = UNIT_OFFSETS.to(root_pos) * heights[:, None, None]
+    """Joint positions ``(B, J, 3)`` and each joint's global rotation matrix ``(B, 3, 3)``
+    on the average skeleton at ``heights`` ``(B,)``."""
+    return skeleton_globals(root_pos, local, UNIT_OFFSETS.to(root_pos) * heights[:, None, None])
+
+
+def skeleton_globals(
+    root_pos: torch.Tensor, local: torch.Tensor, offsets: torch.Tensor
+) -> tuple[torch.Tensor, list[torch.Tensor]]:
+    """:func:`forward_kinematics_globals` on a skeleton of its own: bone offsets ``(B, J, 3)``
+    (a person's, as a motion file gives them, where the average proportions would misplace
+    the joints by centimetres)."""
     pos: list[torch.Tensor] = [root_pos]
     glob: list[torch.Tensor] = [local[:, 0]]
     for j in range(1, J):
@@ -164,6 +173,15 @@ def sensor_inputs(
         after = torch.arange(w)[None, :, None] >= frozen_from[:, None, :]  # (B, W, 2)
         devices = devices.clone()
         devices[:, :, 1:] = torch.where(after[..., None], held, devices[:, :, 1:])
+    return device_features(env, rows, devices)
+
+
+def device_features(env, rows: torch.Tensor, devices: torch.Tensor):
+    """:func:`sensor_inputs` of given device windows ``(B, W, 3, 7)`` (world) at library
+    ``rows`` (the body and scene of those rows, for sensors that read more than devices)."""
+    lib = env.library
+    clip = torch.searchsorted(lib.start, rows, right=True) - 1
+    frame = rows - lib.start[clip]
     now = devices[:, env.window_offsets.index(0), 0]
     frame_of = HeadsetFrame.of(now)
     pose = env.reference.pose(rows)
@@ -183,6 +201,20 @@ def sensor_inputs(
         ctx = replace(ctx, scene=_scene_for(env.scene, clip, frame, lib.fps))
         parts += [o.observe(ctx).reshape(b, -1).float() for o in env.observers]
     return torch.cat(parts, dim=-1), frame_of
+
+
+def reads_controllers(env) -> bool:
+    """Whether the env's sensors read the controllers: their features at the library's first
+    frame change when both controllers move 10 cm. An estimator from the headset alone has
+    none to reach, and must not take them from the library."""
+    lib, first = env.library, torch.zeros(1, dtype=torch.long)
+    rows = lib.start[:1].clone()
+    devices = lib.devices[lib.rows(first, first, env.window_offsets)]
+    moved = devices.clone()
+    moved[:, :, 1:, :3] += 0.1
+    a, _ = device_features(env, rows, devices)
+    b, _ = device_features(env, rows, moved)
+    return not torch.equal(a, b)
 
 
 def _scene_for(scene, clip: torch.Tensor, frame: torch.Tensor, fps: float):

@@ -1,27 +1,29 @@
 """Reaching the controllers: two-bone IK that puts an estimated body's wrists where the
-controllers say they are.
+controllers say they are, along the person's own arm.
 
 A pose estimator predicts joint rotations; its hands come from forward kinematics down a chain
 of six joints (root, three spine joints, collar, shoulder, elbow), so small rotation errors add
-up to tens of centimetres at the hands on motion it never saw, although the controllers give
-each wrist's position and orientation outright (the controller sits at a fixed mount on the
-wrist, :mod:`retarget.motion.devices`). This closes that gap on the estimator's own skeleton
-without training: per arm, the shoulder and elbow rotations are changed by the smallest
-rotations that bring the wrist onto the controller's wrist point, keeping the arm's swivel
-plane (where the elbow points) as the network predicted it, and the wrist takes the
+up to centimetres at the hands on motion it never saw (4 cm at the wrists on held-out corpus
+gestures), although the controllers give each wrist's position and orientation outright (the
+controller sits at a fixed mount on the wrist, :mod:`retarget.motion.devices`). This closes
+that gap without training: per arm, the shoulder and elbow rotations are changed by the
+smallest rotations that bring the wrist onto the controller's wrist point, keeping the arm's
+swivel plane (where the elbow points) as the network predicted it, and the wrist takes the
 controller's orientation. Batched in torch, tens of microseconds per frame.
 
-Measured on held-out corpus walks (estimator trained on 2 h of motion), the character's hands
-came out *farther* from the reference's with it (6.4 cm) than without (3.1 cm): the arm that
-reaches the point on the average skeleton is not the person's arm, and the character's own
-proportions turn that difference into hand error. So it is opt-in (``reach_controllers``).
+The arm must be the person's. The rotations are what the character copies, and the same wrist
+point reached with other bone lengths is other rotations: reached on the average skeleton,
+the Bandai Namco performers' arms (shoulders 8 cm narrower, the rest shorter) put the
+character's hands farther from the reference's than no reach at all (9.4 against 5.9 cm on
+held-out gestures). So the chain is the skeleton the motion source gives (a BVH's own bones;
+the average at the user's height for a device recording), :attr:`MotionLibrary.bones`.
 """
 
 from __future__ import annotations
 
 import torch
 
-from retarget.learn.pose_samples import PARENTS, UNIT_OFFSETS, forward_kinematics_globals
+from retarget.learn.pose_samples import PARENTS, skeleton_globals
 from retarget.motion import skeleton as sk
 from retarget.motion.devices import MOUNT_OFFSETS_175
 
@@ -58,15 +60,16 @@ def wrist_targets(
 
 
 def reach(
-    root_pos: torch.Tensor, local: torch.Tensor, heights: torch.Tensor,
+    root_pos: torch.Tensor, local: torch.Tensor, bones: torch.Tensor,
     wrist_pos: torch.Tensor, wrist_rot: torch.Tensor | None = None,
 ) -> torch.Tensor:  # fmt: skip
-    """Local rotation matrices ``(B, J, 3, 3)`` of the pose ``root_pos``/``local`` (average
-    proportions at ``heights``) with both wrists at ``wrist_pos`` ``(B, 2, 3)`` (as near as
-    the arm's length allows) and, when given, their global rotations ``wrist_rot``."""
+    """Local rotation matrices ``(B, J, 3, 3)`` of the pose ``root_pos``/``local`` on the
+    skeleton ``bones`` (bone offsets ``(B, J, 3)``) with both wrists at ``wrist_pos``
+    ``(B, 2, 3)`` (as near as the arm's length allows) and, when given, their global rotations
+    ``wrist_rot``."""
     local = local.clone()
-    offsets = UNIT_OFFSETS.to(root_pos) * heights[:, None, None]
-    pos, glob = forward_kinematics_globals(root_pos, local, heights)
+    offsets = bones.to(root_pos)
+    pos, glob = skeleton_globals(root_pos, local, offsets)
     for arm, (s, e, w) in enumerate(ARMS):
         target = wrist_pos[:, arm]
         l1 = offsets[:, e].norm(dim=-1)

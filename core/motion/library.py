@@ -81,6 +81,9 @@ class MotionLibrary:
         self.devices = t(cat(lambda c: device_poses(c.global_pos, c.global_rot, c.height)))
         self.contacts = t(cat(lambda c: c.contacts), torch.bool)
         self.heights = t(np.array([c.height for c in items]))
+        self.bones = t(np.stack([c.offsets for c in items]))
+        """Each clip's bone offsets ``(C, J, 3)``: its performer's skeleton, as the devices
+        were synthesised on it."""
         self.start = t(starts, torch.long)
         self.length = t(lengths, torch.long)
         self.weights = t(np.array(w), torch.float64)
