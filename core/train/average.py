@@ -26,7 +26,13 @@ import torch
 from retarget.errors import RetargetError
 from retarget.train.checkpoint import load_checkpoint, save_checkpoint
 from retarget.train.package_model import policy_only
-from retarget.train.run_dir import CHECKPOINTS, LOCK, resolve_run, run_checkpoints
+from retarget.train.run_dir import (
+    CHECKPOINTS,
+    LOCK,
+    checkpoint_iteration,
+    resolve_run,
+    run_checkpoints,
+)
 
 AVERAGED_FROM = "averaged_from.json"
 """In the new run's directory: the run and checkpoint files its weights are the mean of."""
@@ -79,16 +85,26 @@ def average_state(files: Sequence[Path]) -> dict[str, Any]:
             "progress": newest.get("progress", {})}  # fmt: skip
 
 
-def average_run(run: str | Path, out: str | Path, last: int) -> Path:
-    """Write a run directory at ``out`` whose one checkpoint (named as the newest of ``run``)
-    is the mean of ``run``'s ``last`` newest checkpoints; returns ``out``."""
+def average_run(
+    run: str | Path, out: str | Path, last: int, upto: int | None = None
+) -> Path:
+    """Write a run directory at ``out`` whose one checkpoint (named as the newest averaged)
+    is the mean of ``run``'s ``last`` newest checkpoints, or of the ``last`` up to iteration
+    ``upto`` (a checkpoint chosen earlier in a run that went on past it); returns ``out``."""
     source = resolve_run(run)
     if last < 1:
         raise RetargetError(f"--last must be at least 1, got {last}")
-    files = run_checkpoints(source)[-last:]
+    files = run_checkpoints(source)
+    if upto is not None:
+        files = [f for f in files if checkpoint_iteration(f) <= upto]
+        if not files or checkpoint_iteration(files[-1]) != upto:
+            raise RetargetError(f"the run has no checkpoint of iteration {upto}",
+                                file=str(source / CHECKPOINTS))  # fmt: skip
+    files = files[-last:]
     if len(files) < last:
-        raise RetargetError(f"the run has {len(files)} checkpoints, fewer than --last {last}",
-                            file=str(source / CHECKPOINTS))  # fmt: skip
+        within = f" up to iteration {upto}" if upto is not None else ""
+        raise RetargetError(f"the run has {len(files)} checkpoints{within}, fewer than --last "
+                            f"{last}", file=str(source / CHECKPOINTS))  # fmt: skip
     target = Path(out)
     if target.exists() and any(target.iterdir()):
         raise RetargetError("the output directory exists and is not empty", file=str(target),

@@ -100,11 +100,20 @@ def resolve_run(path: str | Path) -> Path:
 
 def run_checkpoints(run: Path) -> list[Path]:
     """The run's numbered checkpoint files (``ckpt-N.pt``), oldest first."""
-    numbered = []
-    for file in (run / CHECKPOINTS).glob("ckpt-*.pt"):
-        if found := re.fullmatch(r"ckpt-(\d+)\.pt", file.name):
-            numbered.append((int(found.group(1)), file))
-    return [file for _, file in sorted(numbered)]
+    files = [f for f in (run / CHECKPOINTS).glob("ckpt-*.pt") if re.fullmatch(CKPT, f.name)]
+    return sorted(files, key=checkpoint_iteration)
+
+
+CKPT = r"ckpt-(\d+)\.pt"
+"""A numbered checkpoint's file name; the number is the training iteration it was saved at."""
+
+
+def checkpoint_iteration(file: Path) -> int:
+    """The iteration of a numbered checkpoint file (``ckpt-0000360.pt``: 360)."""
+    found = re.fullmatch(CKPT, file.name)
+    if found is None:
+        raise RetargetError("is not a numbered checkpoint (ckpt-N.pt)", file=str(file))
+    return int(found.group(1))
 
 
 def latest_checkpoint(run: Path) -> Path:

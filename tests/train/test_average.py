@@ -61,6 +61,18 @@ def test_the_mean_of_the_last_checkpoints_loads_and_acts(tmp_path: Path) -> None
         average_run(run, out, 2)
     with pytest.raises(RetargetError, match="fewer than --last 9"):
         average_run(run, tmp_path / "more", 9)
+    # the checkpoints up to one chosen earlier in the run, not the run's newest
+    early = average_run(run, tmp_path / "early", 2, upto=3)
+    assert json.loads((early / "averaged_from.json").read_text())["checkpoints"] == [
+        "ckpt-0000002.pt", "ckpt-0000003.pt"]  # fmt: skip
+    upto3 = load_checkpoint(early / "checkpoints" / "ckpt-0000003.pt")["algorithm"]["actor"]
+    for key, value in upto3.items():
+        expected = (states[0]["actor"][key].double() + states[1]["actor"][key].double()) / 2
+        assert torch.allclose(value.double(), expected, atol=1e-6), key
+    with pytest.raises(RetargetError, match="no checkpoint of iteration 7"):
+        average_run(run, tmp_path / "none", 2, upto=7)
+    with pytest.raises(RetargetError, match="up to iteration 2, fewer than --last 4"):
+        average_run(run, tmp_path / "short", 4, upto=2)
 
 
 def test_checkpoints_of_other_networks_are_refused_naming_the_file(tmp_path: Path) -> None:
