@@ -15,8 +15,9 @@ The arm must be the person's. The rotations are what the character copies, and t
 point reached with other bone lengths is other rotations: reached on the average skeleton,
 the Bandai Namco performers' arms (shoulders 8 cm narrower, the rest shorter) put the
 character's hands farther from the reference's than no reach at all (9.4 against 5.9 cm on
-held-out gestures). So the chain is the skeleton the motion source gives (a BVH's own bones;
-the average at the user's height for a device recording), :attr:`MotionLibrary.bones`.
+held-out gestures). So the chain is the skeleton the motions give (a BVH's own bones),
+:attr:`MotionLibrary.bones`; an application running the exported network reaches along its
+user's measured arm the same way.
 """
 
 from __future__ import annotations
