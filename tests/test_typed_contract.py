@@ -137,7 +137,7 @@ def test_built_in_algorithms_have_the_capabilities_they_define() -> None:
     assert got == {
         "ppo": ["acting", "exportable", "warm_startable", "data_parallel"],
         "dagger": ["acting", "exportable", "warm_startable", "data_parallel"],
-        "estimator": ["exportable", "pose_estimating", "warm_startable"],
+        "estimator": ["exportable", "post_staged", "pose_estimating", "warm_startable"],
         "expert_bc": ["acting", "exportable"],
     }
 

@@ -47,7 +47,7 @@ def _export_stages(env, folder: Path) -> list[dict]:
 
 def run(args: argparse.Namespace, registry: Registry) -> int:
     from retarget.cli.console import out
-    from retarget.deploy import export_onnx, policy_of
+    from retarget.deploy import export_onnx, export_post_stages, policy_of
     from retarget.sim import describe_actuation
     from retarget.train.load import load_run
     if not args.onnx:
@@ -76,6 +76,9 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     stages = _export_stages(env, path.parent)
     if stages:
         metadata["stages"] = stages  # networks inside sensors, run before the policy
+    after = export_post_stages(loaded.algorithm, path.parent)
+    if after:
+        metadata["after"] = after  # steps on the exported module's output
     exported = export_onnx(loaded.algorithm, path, metadata)
     out.print(
         f"wrote {exported.onnx} (obs {exported.obs_dim} -> action {exported.action_dim}) "

@@ -19,7 +19,8 @@ import torch
 
 from retarget.errors import RetargetError
 from retarget.kinds import Algorithm
-from retarget.kinds.capabilities import Exportable
+from retarget.kinds.capabilities import Exportable, PostStaged
+from retarget.kinds.deploy_stage import DeployStage
 
 OPSET = 17
 
@@ -80,3 +81,42 @@ def export_onnx(
     side = out.with_suffix(".json")
     side.write_text(json.dumps(meta, indent=2))
     return ExportedPolicy(out, side, obs_dim, action_dim)
+
+
+def export_stage(stage: DeployStage, folder: Path) -> dict[str, Any]:
+    """Write ``folder/NAME.onnx`` (dynamic batch on every input and output) and return its
+    sidecar entry: file, inputs and outputs with their shapes, the stage's description."""
+    folder.mkdir(parents=True, exist_ok=True)
+    target = folder / f"{stage.name}.onnx"
+    examples = tuple(stage.inputs.values())
+    with torch.no_grad():
+        results = stage.module.eval()(*examples)
+    results = results if isinstance(results, tuple) else (results,)
+    if len(results) != len(stage.outputs):
+        raise RetargetError(f"stage '{stage.name}' gives {len(results)} outputs but names "
+                            f"{len(stage.outputs)}")  # fmt: skip
+    names = [*stage.inputs, *stage.outputs]
+    tmp = target.with_name(target.name + ".tmp")
+    with warnings.catch_warnings():  # the TorchScript-based exporter warns it is legacy
+        warnings.simplefilter("ignore")
+        torch.onnx.export(stage.module, examples, str(tmp), input_names=list(stage.inputs),
+                          output_names=list(stage.outputs),
+                          dynamic_axes={n: {0: "batch"} for n in names},
+                          opset_version=OPSET, dynamo=False)  # fmt: skip
+    tmp.replace(target)
+
+    def shapes(tensors) -> dict[str, list[str | int]]:
+        return {n: ["batch", *map(int, t.shape[1:])] for n, t in tensors}
+
+    return {"name": stage.name, "onnx": target.name,
+            "inputs": shapes(stage.inputs.items()),
+            "outputs": shapes(zip(stage.outputs, results, strict=True)),
+            **stage.description}  # fmt: skip
+
+
+def export_post_stages(algorithm: Algorithm, folder: Path) -> list[dict[str, Any]]:
+    """The algorithm's steps after its exported module, each written beside it (none when
+    it has no :class:`PostStaged` capability)."""
+    if not isinstance(algorithm, PostStaged):
+        return []
+    return [export_stage(stage, folder) for stage in algorithm.post_stages()]

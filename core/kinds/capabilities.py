@@ -7,6 +7,8 @@ algorithm has a capability by defining its method:
 * :class:`Acting`: ``act(obs)``, deterministic actions: ``retarget eval``, ``play`` and
   ``serve`` step physics with it.
 * :class:`Exportable`: ``policy()``, the deployable module ``retarget export`` writes.
+* :class:`PostStaged`: ``post_stages()``, networks an application runs after that module
+  (:class:`~retarget.kinds.deploy_stage.DeployStage`), written beside it.
 * :class:`PoseEstimating`: ``pose_estimator()``, a kinematic method (it outputs a body, not
   actions): evaluated by placing the character in its estimate; it learns from the motion
   library and needs a :class:`~retarget.kinds.tracking_env.TrackingEnv`.
@@ -28,6 +30,7 @@ from retarget.errors import PluginError
 if TYPE_CHECKING:
     import torch
 
+    from retarget.kinds.deploy_stage import DeployStage
     from retarget.kinds.pose_estimator import PoseEstimator
 
 
@@ -43,6 +46,14 @@ class Exportable(Protocol):
     def policy(self) -> tuple[str, torch.nn.Module]:
         """``(group, module)``: ``module`` maps that group's raw ``(B, D)`` float32 tensor to
         the exported output (actions in [-1, 1] for a policy), normalisation included."""
+        ...
+
+
+@runtime_checkable
+class PostStaged(Protocol):
+    def post_stages(self) -> list[DeployStage]:
+        """Steps an application runs on the exported module's output (none: an empty list),
+        each exported as its own ONNX file."""
         ...
 
 
@@ -73,6 +84,7 @@ class DataParallel(Protocol):
 CAPABILITIES: dict[str, type] = {
     "acting": Acting,
     "exportable": Exportable,
+    "post_staged": PostStaged,
     "pose_estimating": PoseEstimating,
     "warm_startable": WarmStartable,
     "data_parallel": DataParallel,
@@ -92,6 +104,7 @@ def capabilities(algorithm: object) -> list[str]:
 _LACKS = {
     "acting": "drives no character (it has no act())",
     "exportable": "has no exportable policy (no policy())",
+    "post_staged": "has no steps after its exported module (no post_stages())",
     "pose_estimating": "is not a pose estimator (no pose_estimator())",
     "warm_startable": "cannot start from another run's weights (no warm_start())",
     "data_parallel": "does not train data-parallel (no fresh_rank())",

@@ -24,7 +24,13 @@ from __future__ import annotations
 
 import torch
 
-from retarget.learn.pose_samples import PARENTS, skeleton_globals
+from retarget.learn.pose_samples import (
+    PARENTS,
+    J,
+    matrix_to_6d,
+    sixd_to_matrix,
+    skeleton_globals,
+)
 from retarget.motion import skeleton as sk
 from retarget.motion.devices import MOUNT_OFFSETS_175
 
@@ -98,3 +104,22 @@ def reach(
         if wrist_rot is not None:
             local[:, w] = g_e.transpose(1, 2) @ wrist_rot[:, arm]
     return local
+
+
+class ReachStage(torch.nn.Module):
+    """The reach as a step after a deployed estimator (what ``retarget export`` writes as
+    ``reach.onnx``): its output ``(B, 3 + 6J + ...)`` (root position, 6D rotations, then
+    whatever follows, kept), the controllers ``(B, 2, 7)`` in the same headset frame, the
+    user's bone offsets ``(B, J, 3)`` and height ``(B,)`` -> the same output with the arms'
+    rotations reached."""
+
+    def forward(
+        self, estimate: torch.Tensor, controllers: torch.Tensor, bones: torch.Tensor,
+        height: torch.Tensor,
+    ) -> torch.Tensor:  # fmt: skip
+        a = 3 + J * 6
+        root = estimate[:, :3]
+        local = sixd_to_matrix(estimate[:, 3:a].reshape(-1, J, 6))
+        wrist_pos, wrist_rot = wrist_targets(controllers, height)
+        reached = matrix_to_6d(reach(root, local, bones, wrist_pos, wrist_rot))
+        return torch.cat([root, reached.reshape(-1, J * 6), estimate[:, a:]], dim=-1)

@@ -25,6 +25,7 @@ from retarget.kinds.tracking_env import tracking_env
 if TYPE_CHECKING:
     import torch
 
+    from retarget.kinds.deploy_stage import DeployStage
     from retarget.learn.estimator import EstimatorLearner
 
 
@@ -157,8 +158,6 @@ class Estimator(Algorithm[EstimatorConfig]):
             ],
             "control_hz": env.sim.settings.control_hz,
             "reach_controllers": bool(learner.reach),
-            "reach_note": "the network's estimate, before retarget.learn.reach puts its "
-            "wrists on the controllers along the person's arm (done after it, when true)",
             "joints": list(sk.JOINT_NAMES),
             "outputs": [
                 {"name": "root_pos", "size": 3},
@@ -168,6 +167,39 @@ class Estimator(Algorithm[EstimatorConfig]):
                 {"name": "position_std", "size": sk.NUM_JOINTS, "note": "metres, per joint"},
             ],
         }  # fmt: skip
+
+    def post_stages(self) -> list[DeployStage]:
+        """With ``reach_controllers``, the reach after the network (``reach.onnx``): what
+        ``retarget eval`` measures is the reached estimate, so an application runs it too,
+        with its user's bone offsets (the canonical skeleton's joints) and height."""
+        import torch
+
+        from retarget.kinds.deploy_stage import DeployStage
+        from retarget.learn.estimator import DeployedEstimator
+        from retarget.learn.pose_samples import sensor_inputs
+        from retarget.learn.reach import ReachStage
+
+        learner = self._ready()
+        if not learner.reach:
+            return []
+        lib = learner.env.library
+        rows = lib.start[:1].clone()
+        inputs, frame = sensor_inputs(learner.env, rows)
+        with torch.no_grad():
+            estimate = DeployedEstimator(learner.net).eval()(inputs)
+        ctrl = lib.devices[rows][:, 1:3]
+        ctrl = torch.cat([frame.points_in(ctrl[..., :3]), frame.quat_in_many(ctrl[..., 3:7])], -1)
+        examples = {"estimate": estimate, "controllers": ctrl.float(),
+                    "bones": lib.bones[:1].float(), "height": lib.heights[:1].float()}  # fmt: skip
+        return [DeployStage("reach", ReachStage(), examples, ("reached",), {
+            "note": "run on the estimator's output: its wrists reach the controllers along "
+            "the user's own arm (what retarget eval measured); the output has the estimator's "
+            "layout",
+            "controllers": "left, right: position and wxyz in the estimator's headset frame",
+            "bones": "the user's bone offsets in the T-pose, one row per joint (the "
+            "estimator's 'joints' order), metres",
+            "height": "the user's standing height, metres (scales the controllers' mounts)",
+        })]  # fmt: skip
 
     def warm_start(self, state: Mapping[str, Any], inputs: Mapping[str, torch.Tensor]) -> None:
         """``--init-from`` another estimator run: its network, retrained on this run's motions

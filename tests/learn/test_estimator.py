@@ -145,6 +145,24 @@ def test_an_estimator_run_trains_resumes_evaluates_and_exports(tmp_path: Path) -
     (got,) = ort.InferenceSession(str(onnx_path)).run(None, {"obs": inputs.numpy()})
     assert got.shape == (len(inputs), DEPLOYED_SIZE) and meta["obs_dim"] == inputs.shape[1]
     np.testing.assert_allclose(got, expected, atol=1e-4, rtol=0)
+    # the reach after it (on by default with controllers): network then reach.onnx gives what
+    # retarget eval measures
+    (after,) = meta["after"]
+    assert after["name"] == "reach" and after["inputs"]["bones"] == ["batch", J, 3]
+    learner = loaded.algorithm.learner
+    rows = torch.arange(0, 200, 9)
+    reached, frame = learner.estimate_rows(rows)
+    lib = loaded.env.library
+    ctrl = lib.devices[rows][:, 1:3]
+    ctrl = torch.cat([frame.points_in(ctrl[..., :3]), frame.quat_in_many(ctrl[..., 3:7])], -1)
+    clip = torch.searchsorted(lib.start, rows, right=True) - 1
+    (final,) = ort.InferenceSession(str(onnx_path.parent / after["onnx"])).run(None, {
+        "estimate": got, "controllers": ctrl.float().numpy(),
+        "bones": lib.bones[clip].float().numpy(), "height": lib.heights[clip].float().numpy()})
+    np.testing.assert_allclose(final[:, 3 : 3 + 6 * J], reached.rot6d.reshape(len(rows), -1),
+                               atol=1e-4, rtol=0)  # fmt: skip
+    assert np.abs(final[:, 3 : 3 + 6 * J] - got[:, 3 : 3 + 6 * J]).max() > 1e-2  # it reached
+    np.testing.assert_array_equal(final[:, 3 + 6 * J :], got[:, 3 + 6 * J :])
 
 
 def test_two_stage_eval_follows_the_estimate_and_measures_the_truth(tmp_path: Path) -> None:
