@@ -1,4 +1,5 @@
-"""``retarget play RUN [RUN...] --motions CLIP --out X.gif``: videos of trained policies."""
+"""``retarget play RUN [RUN...] --motions CLIP --out X.gif``: videos of trained policies, and of
+pose estimators (the character placed in the estimate each frame)."""
 
 from __future__ import annotations
 
@@ -9,14 +10,14 @@ from typing import TYPE_CHECKING
 from retarget.cli.run_changes import add_run_change_args
 from retarget.commands.numbers import amount, count, image_size
 from retarget.errors import RetargetError, require_extra
-from retarget.kinds.capabilities import Acting, Exportable, require
+from retarget.kinds.capabilities import Acting, Exportable, PoseEstimating, require
 from retarget.registry import Registry
 
 if TYPE_CHECKING:
     from retarget.motion.device_recording import DeviceRecording
 
 
-PLAYS = "play shows a policy driving physics; `retarget eval RUN` measures a pose estimator"
+PLAYS = "play shows a policy driving physics or a pose estimator's estimate"
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     parser = sub.add_parser("play", help="render a trained policy (several runs side by side)")
@@ -136,6 +137,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     from retarget.learn.columns import image_inputs
     from retarget.motion.device_recording import read_recording
     from retarget.render.character_view import label, save_video
+    from retarget.render.estimate_video import render_estimate
     from retarget.render.obs_views import image_panel
     from retarget.render.policy_video import render_rollout
     from retarget.train.load import load_run
@@ -156,6 +158,19 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
         if not 0 <= args.clip < env.library.num_clips:
             raise RetargetError(f"--clip {args.clip}: the motions hold {env.library.num_clips}")
         start = round(args.start * env.sim.settings.control_hz)
+        algorithm = loaded.algorithm
+        if isinstance(algorithm, PoseEstimating) and not isinstance(algorithm, Acting):
+            if stream is not None or args.cameras:
+                raise RetargetError(
+                    f"{path} is a pose estimator: it plays motion clips (--motions), with the "
+                    "character placed in its estimate; --input and --cameras drive a policy")
+            frames = render_estimate(env, algorithm.pose_estimator(), args.clip, start=start,
+                                     seconds=args.seconds, width=width, height=height,
+                                     ghost_offset=args.ghost_offset, azimuth=args.azimuth,
+                                     elevation=args.elevation)  # fmt: skip
+            name = f"{env.character.name}: {env.library.names[args.clip]} (estimate)"
+            views.append([label(f, [(0.5, 0.06, name)]) for f in frames])
+            continue
         group = require(loaded.algorithm, Exportable).policy()[0] if args.cameras else "actor"
         images = image_inputs(env, group) if args.cameras else ()
         if args.cameras and not images:

@@ -64,19 +64,10 @@ def render_rollout(
     steps = int(min(seconds * env.sim.settings.control_hz, int(lib.length[clip]) - 1 - start))
     n = env.num_envs
     obs = env.place(torch.full((n,), clip), torch.full((n,), start))
-    cam = mujoco.MjvCamera()
-    cam.type = mujoco.mjtCamera.mjCAMERA_FREE
-    # frame the character by its height at the start (Dino is 2.5 m, the human 1.75 m)
     top = float(env.sim.state.body_pos[0, :, 2].max())
-    cam.distance, cam.elevation, cam.azimuth = 4.0 * max(1.0, top / 1.8), elevation, azimuth
-    shift = np.array([0.0, ghost_offset, 0.0])
+    view = FrameView(env, top, azimuth, elevation, ghost_offset, ghost)
     head = env.layout.site("head")
     frames = []
-    # the training world has only MuJoCo's default headlight, which renders dim: light the
-    # video like `character show` does (visual settings only; physics reads none of them)
-    model.vis.headlight.ambient[:] = [0.45, 0.45, 0.45]
-    model.vis.headlight.diffuse[:] = [0.6, 0.6, 0.6]
-    model.vis.headlight.specular[:] = [0.1, 0.1, 0.1]
     with FrameRenderer(model, width, height) as render, torch.no_grad():
         for _ in range(max(steps, 1)):
             if observed is not None:
@@ -88,15 +79,40 @@ def render_rollout(
                 )
             row = int(lib.rows(env.clip[:1], env.frame[:1])[0, 0])
             copy_env_pose(env, 0, data)
-            cam.lookat[:] = [data.qpos[0], data.qpos[1], 0.5 * top]
-            render.renderer.update_scene(data, camera=cam)
-            scene = render.renderer.scene
-            human = lib.global_pos[row].numpy() + shift
-            for j in range(1, sk.NUM_JOINTS if ghost else 1):
-                a, b = human[sk.PARENTS[j]], human[j]
-                add_decor_geom(mujoco, scene, mujoco.mjtGeom.mjGEOM_CAPSULE, [0.025], a, GHOST, b)
-            for d in lib.devices[row].numpy():
-                add_decor_geom(mujoco, scene, mujoco.mjtGeom.mjGEOM_BOX, [0.035] * 3, d[:3], DEVICE)
-            frames.append(render.renderer.render().copy())
+            frames.append(view.draw(render, data, row))
     return frames
 
+
+class FrameView:
+    """How every frame of a video is drawn: a camera following the character (framed by its
+    height ``top`` at the start: the Dino is 2.5 m, the human 1.75 m), the library's human
+    motion at that frame as a ghost skeleton (shifted sideways by ``ghost_offset``; none when
+    ``ghost`` is false) and its devices as yellow boxes."""
+
+    def __init__(self, env: RetargetEnv, top: float, azimuth: float, elevation: float,
+                 ghost_offset: float = 0.0, ghost: bool = True) -> None:  # fmt: skip
+        self.lib, self.top, self.ghost = env.library, top, ghost
+        self.cam = mujoco.MjvCamera()
+        self.cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+        self.cam.distance = 4.0 * max(1.0, top / 1.8)
+        self.cam.elevation, self.cam.azimuth = elevation, azimuth
+        self.shift = np.array([0.0, ghost_offset, 0.0])
+        # the training world has only MuJoCo's default headlight, which renders dim: light
+        # the video like `character show` does (visual settings only; physics reads none)
+        model = env.world.model
+        model.vis.headlight.ambient[:] = [0.45, 0.45, 0.45]
+        model.vis.headlight.diffuse[:] = [0.6, 0.6, 0.6]
+        model.vis.headlight.specular[:] = [0.1, 0.1, 0.1]
+
+    def draw(self, render: FrameRenderer, data: mujoco.MjData, row: int) -> np.ndarray:
+        """The image of ``data`` (kinematics done) at library ``row``."""
+        self.cam.lookat[:] = [data.qpos[0], data.qpos[1], 0.5 * self.top]
+        render.renderer.update_scene(data, camera=self.cam)
+        scene = render.renderer.scene
+        human = self.lib.global_pos[row].numpy() + self.shift
+        for j in range(1, sk.NUM_JOINTS if self.ghost else 1):
+            a, b = human[sk.PARENTS[j]], human[j]
+            add_decor_geom(mujoco, scene, mujoco.mjtGeom.mjGEOM_CAPSULE, [0.025], a, GHOST, b)
+        for d in self.lib.devices[row].numpy():
+            add_decor_geom(mujoco, scene, mujoco.mjtGeom.mjGEOM_BOX, [0.035] * 3, d[:3], DEVICE)
+        return render.renderer.render().copy()

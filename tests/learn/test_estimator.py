@@ -131,8 +131,12 @@ def test_an_estimator_run_trains_resumes_evaluates_and_exports(tmp_path: Path) -
                "--set", "algorithm.window=6", "--steps", "64", "--runs-dir", str(tmp_path)])
     assert rc != 0
 
-    # a pose estimator has no actions: play says so instead of failing inside
-    assert main(["play", str(run), "--out", str(tmp_path / "x.png")]) == 2
+    # a pose estimator has no actions: play draws the character placed in its estimate, and
+    # refuses a device recording (what drives a policy) by saying so
+    assert main(["play", str(run), "--seconds", "0.5", "--out", str(tmp_path / "x.png")]) == 0
+    assert (tmp_path / "x.png").stat().st_size > 1000
+    recording = Path(__file__).parents[2] / "examples" / "recordings" / "walk_openxr.jsonl"
+    assert main(["play", str(run), "--input", str(recording), "--out", str(tmp_path / "y.png")]) == 2
 
     ort = pytest.importorskip("onnxruntime")
     assert main(["export", str(run), "--onnx"]) == 0
