@@ -14,7 +14,7 @@ import numpy as np
 
 import retarget
 from retarget.render.character_view import label, save_image
-from retarget.render.estimate_video import render_estimate
+from retarget.render.estimate_video import Shot, render_estimate
 from retarget.train.load import load_run
 
 
@@ -32,8 +32,7 @@ def main() -> int:
         loaded = load_run(args.run, registry, motions=args.clip,
                           assignments=[f"algorithm.reach_controllers={reach}"])  # fmt: skip
         frames = render_estimate(loaded.env, loaded.algorithm.pose_estimator(), 0,
-                                 seconds=args.seconds, width=640, height=480, azimuth=180,
-                                 elevation=-5)  # fmt: skip
+                                 seconds=args.seconds, shot=Shot(640, 480, 180.0, -5.0))
         picks = [frames[i] for i in np.linspace(10, len(frames) - 1, 4).astype(int)]
         strip = np.concatenate([f[20:280, 200:440] for f in picks], axis=1)
         rows.append(label(strip, [(0.5, 0.06, text)]))

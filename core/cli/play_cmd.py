@@ -137,7 +137,7 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     from retarget.learn.columns import image_inputs
     from retarget.motion.device_recording import read_recording
     from retarget.render.character_view import label, save_video
-    from retarget.render.estimate_video import render_estimate
+    from retarget.render.estimate_video import Shot, render_estimate
     from retarget.render.obs_views import image_panel
     from retarget.render.policy_video import render_rollout
     from retarget.train.load import load_run
@@ -164,10 +164,9 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
                 raise RetargetError(
                     f"{path} is a pose estimator: it plays motion clips (--motions), with the "
                     "character placed in its estimate; --input and --cameras drive a policy")
+            shot = Shot(width, height, args.azimuth, args.elevation, args.ghost_offset)
             frames = render_estimate(env, algorithm.pose_estimator(), args.clip, start=start,
-                                     seconds=args.seconds, width=width, height=height,
-                                     ghost_offset=args.ghost_offset, azimuth=args.azimuth,
-                                     elevation=args.elevation)  # fmt: skip
+                                     seconds=args.seconds, shot=shot)  # fmt: skip
             name = f"{env.character.name}: {env.library.names[args.clip]} (estimate)"
             views.append([label(f, [(0.5, 0.06, name)]) for f in frames])
             continue

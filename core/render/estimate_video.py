@@ -9,6 +9,8 @@ video's is (:class:`retarget.render.policy_video.FrameView`).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import mujoco
 import numpy as np
 import torch
@@ -21,19 +23,22 @@ from retarget.render.character_view import FrameRenderer
 from retarget.render.policy_video import FrameView
 
 
+@dataclass(frozen=True)
+class Shot:
+    """Picture size (pixels), camera direction (degrees, world frame) and the ghost's
+    sideways shift (m) of a video."""
+
+    width: int = 480
+    height: int = 360
+    azimuth: float = 135.0
+    elevation: float = -15.0
+    ghost_offset: float = 0.0
+
+
 def render_estimate(
-    env: RetargetEnv,
-    estimator: PoseEstimator,
-    clip: int,
-    *,
-    start: int = 0,
-    seconds: float = 8.0,
-    width: int = 480,
-    height: int = 360,
-    ghost_offset: float = 0.0,
-    azimuth: float = 135.0,
-    elevation: float = -15.0,
-) -> list[np.ndarray]:
+    env: RetargetEnv, estimator: PoseEstimator, clip: int, *, start: int = 0,
+    seconds: float = 8.0, shot: Shot = Shot(),
+) -> list[np.ndarray]:  # fmt: skip
     """Every control step of ``clip`` from frame ``start``, ``seconds`` long, with the
     character in ``estimator``'s estimate (its motions are ``env``'s library)."""
     lib = env.library
@@ -48,9 +53,9 @@ def render_estimate(
     data.qpos[:nq] = placed.qpos64[first]
     mujoco.mj_kinematics(model, data)
     top = float(placed.pose(torch.tensor([first])).body_pos[0, :, 2].max())
-    view = FrameView(env, top, azimuth, elevation, ghost_offset)
+    view = FrameView(env, top, shot.azimuth, shot.elevation, shot.ghost_offset)
     frames = []
-    with FrameRenderer(model, width, height) as render:
+    with FrameRenderer(model, shot.width, shot.height) as render:
         for row in range(first + 1, first + 1 + max(steps, 1)):
             data.qpos[:nq] = placed.qpos64[row]
             mujoco.mj_kinematics(model, data)
