@@ -194,7 +194,8 @@ class Estimator(Algorithm[EstimatorConfig]):
         return [DeployStage("reach", ReachStage(), examples, ("reached",), {
             "note": "run on the estimator's output: its wrists reach the controllers along "
             "the user's own arm (what retarget eval measured); the output has the estimator's "
-            "layout",
+            "layout. While the runtime reports a controller untracked, keep the network's "
+            "estimate instead (the reach would pin that hand to its last reported pose)",
             "controllers": "left, right: position and wxyz in the estimator's headset frame",
             "bones": "the user's bone offsets in the T-pose, one row per joint (the "
             "estimator's 'joints' order), metres",
