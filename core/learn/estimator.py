@@ -238,8 +238,7 @@ class EstimatorLearner:
 
         lib = self.env.library
         clip = torch.searchsorted(lib.start, rows, right=True) - 1
-        ctrl = lib.devices[rows][:, 1:3]  # (B, 2, 7) world
-        ctrl = torch.cat([hf.points_in(ctrl[..., :3]), hf.quat_in_many(ctrl[..., 3:7])], -1)
+        ctrl = hf.poses_in(lib.devices[rows][:, 1:3])  # (B, 2, 7)
         wrist_pos, wrist_rot = wrist_targets(ctrl, lib.heights[clip].float())
         local = reach(out.root_pos, out.matrices, lib.bones[clip].float(), wrist_pos, wrist_rot)
         return replace(out, rot6d=matrix_to_6d(local))

@@ -118,6 +118,10 @@ class HeadsetFrame:
         k = q.shape[1]
         return quat_mul(quat_conj(self.yaw)[:, None].expand(-1, k, -1), q)
 
+    def poses_in(self, poses: torch.Tensor) -> torch.Tensor:
+        """Device poses ``(B, K, 7)`` (world position, wxyz) in this frame, K per sample."""
+        return torch.cat([self.points_in(poses[..., :3]), self.quat_in_many(poses[..., 3:7])], -1)
+
     def quat_out(self, q: torch.Tensor) -> torch.Tensor:
         return quat_mul(self.yaw, q)
 

@@ -50,8 +50,6 @@ def render_estimate(
     data = mujoco.MjData(model)
     first = int(lib.start[clip]) + start
     nq = placed.qpos64.shape[1]
-    data.qpos[:nq] = placed.qpos64[first]
-    mujoco.mj_kinematics(model, data)
     top = float(placed.pose(torch.tensor([first])).body_pos[0, :, 2].max())
     view = FrameView(env, top, shot.azimuth, shot.elevation, shot.ghost_offset)
     frames = []

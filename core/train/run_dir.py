@@ -98,14 +98,14 @@ def resolve_run(path: str | Path) -> Path:
     return p
 
 
+CKPT = r"ckpt-(\d+)\.pt"
+"""A numbered checkpoint's file name; the number is the training iteration it was saved at."""
+
+
 def run_checkpoints(run: Path) -> list[Path]:
     """The run's numbered checkpoint files (``ckpt-N.pt``), oldest first."""
     files = [f for f in (run / CHECKPOINTS).glob("ckpt-*.pt") if re.fullmatch(CKPT, f.name)]
     return sorted(files, key=checkpoint_iteration)
-
-
-CKPT = r"ckpt-(\d+)\.pt"
-"""A numbered checkpoint's file name; the number is the training iteration it was saved at."""
 
 
 def checkpoint_iteration(file: Path) -> int:
@@ -122,7 +122,7 @@ def latest_checkpoint(run: Path) -> Path:
     marker = run / CHECKPOINTS / CURRENT
     if marker.is_file():
         name = marker.read_text(encoding="utf-8", errors="replace")[:64].strip()
-        if not re.fullmatch(r"ckpt-[0-9]+\.pt", name) or not (run / CHECKPOINTS / name).is_file():
+        if not re.fullmatch(CKPT, name) or not (run / CHECKPOINTS / name).is_file():
             raise RetargetError(
                 f"names {name!r}, which is no checkpoint file beside it",
                 file=str(marker),

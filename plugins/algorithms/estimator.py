@@ -187,8 +187,7 @@ class Estimator(Algorithm[EstimatorConfig]):
         inputs, frame = sensor_inputs(learner.env, rows)
         with torch.no_grad():
             estimate = DeployedEstimator(learner.net).eval()(inputs)
-        ctrl = lib.devices[rows][:, 1:3]
-        ctrl = torch.cat([frame.points_in(ctrl[..., :3]), frame.quat_in_many(ctrl[..., 3:7])], -1)
+        ctrl = frame.poses_in(lib.devices[rows][:, 1:3])
         examples = {"estimate": estimate, "controllers": ctrl.float(),
                     "bones": lib.bones[:1].float(), "height": lib.heights[:1].float()}  # fmt: skip
         return [DeployStage("reach", ReachStage(), examples, ("reached",), {

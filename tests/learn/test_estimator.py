@@ -158,8 +158,7 @@ def test_an_estimator_run_trains_resumes_evaluates_and_exports(tmp_path: Path) -
     rows = torch.arange(0, 200, 9)
     reached, frame = learner.estimate_rows(rows)
     lib = loaded.env.library
-    ctrl = lib.devices[rows][:, 1:3]
-    ctrl = torch.cat([frame.points_in(ctrl[..., :3]), frame.quat_in_many(ctrl[..., 3:7])], -1)
+    ctrl = frame.poses_in(lib.devices[rows][:, 1:3])
     clip = torch.searchsorted(lib.start, rows, right=True) - 1
     (final,) = ort.InferenceSession(str(onnx_path.parent / after["onnx"])).run(None, {
         "estimate": got, "controllers": ctrl.float().numpy(),

@@ -63,8 +63,7 @@ def test_controllers_give_the_wrists_and_reach_restores_them() -> None:
     truth = pose_targets(env, rows, hf)
     local = sixd_to_matrix(truth.rot6d)
     pos, glob = forward_kinematics_globals(truth.root_pos, local, truth.heights)
-    ctrl = lib.devices[rows][:, 1:3]
-    ctrl = torch.cat([hf.points_in(ctrl[..., :3]), hf.quat_in_many(ctrl[..., 3:7])], -1)
+    ctrl = hf.poses_in(lib.devices[rows][:, 1:3])
     wrist_pos, wrist_rot = wrist_targets(ctrl, truth.heights)
     bones = UNIT_OFFSETS * truth.heights[:, None, None]
     for k, (_, _, w) in enumerate(ARMS):  # the mounts invert exactly
@@ -114,8 +113,7 @@ def test_reach_follows_the_persons_own_arm() -> None:
     truth = pose_targets(env, rows, hf)
     local = sixd_to_matrix(truth.rot6d)
     person = lib.bones[clip].float()
-    ctrl = lib.devices[rows][:, 1:3]
-    ctrl = torch.cat([hf.points_in(ctrl[..., :3]), hf.quat_in_many(ctrl[..., 3:7])], -1)
+    ctrl = hf.poses_in(lib.devices[rows][:, 1:3])
     wrist_pos, wrist_rot = wrist_targets(ctrl, truth.heights)
     bent = _bend(local, 0.6)
     average = UNIT_OFFSETS * truth.heights[:, None, None]
