@@ -62,7 +62,11 @@ def test_the_mean_of_the_last_checkpoints_loads_and_acts(tmp_path: Path) -> None
     with pytest.raises(RetargetError, match="fewer than --last 9"):
         average_run(run, tmp_path / "more", 9)
     # the checkpoints up to one chosen earlier in the run, not the run's newest
-    early = average_run(run, tmp_path / "early", 2, upto=3)
+    early = tmp_path / "early"
+    cli = subprocess.run([sys.executable, "-m", "retarget", "average", str(run), "--last", "2",
+                          "--upto", "3", "--out", str(early)], capture_output=True, text=True,
+                         cwd=tmp_path)  # fmt: skip
+    assert cli.returncode == 0, cli.stderr
     assert json.loads((early / "averaged_from.json").read_text())["checkpoints"] == [
         "ckpt-0000002.pt", "ckpt-0000003.pt"]  # fmt: skip
     upto3 = load_checkpoint(early / "checkpoints" / "ckpt-0000003.pt")["algorithm"]["actor"]
