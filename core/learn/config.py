@@ -23,7 +23,7 @@ Decisions (figures from ``benchmarks/bench_ppo_update.py`` on a 2-core machine):
 from __future__ import annotations
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import Field
 
@@ -114,6 +114,12 @@ class DaggerConfig(PluginConfig):
         pattern=r"^checkpoints/ckpt-[0-9]+\.pt$",
     )
     teacher_group: str = Field("teacher", description="observation group the teacher reads")
+    teacher_sensors: dict[str, dict[str, Any]] = Field(
+        default_factory=dict,
+        description="settings changed in the teacher's own sensors while it labels, by sensor "
+        "name, e.g. {reference_action: {offset: 3}}: its residual's base a frame further "
+        "ahead, so labels lead a teacher that lags its reference; the network is unchanged",
+    )
     actor_group: str = Field("actor", description="observation group the student reads")
     rollout_steps: int = Field(32, gt=0, le=10_000, description="steps per env per iteration")
     learning_rate: float = Field(5e-4, gt=0, le=1)

@@ -36,6 +36,27 @@ def _names(components: list[Any]) -> list[str]:
     return [c["type"] if isinstance(c, dict) else str(c) for c in components]
 
 
+def _changed_sensors(
+    sensors: list[Any], actor: list[str], changes: Mapping[str, Mapping[str, Any]], lock: Path
+) -> list[Any]:
+    """The teacher's sensors with ``algorithm.teacher_sensors`` applied; a name that is not
+    one of the teacher's sensors is refused naming the ones it has."""
+    names = _names(sensors)
+    unknown = [n for n in changes if n not in names or n not in actor]
+    if unknown:
+        raise RecipeError(
+            f"the teacher has no sensor {', '.join(map(repr, unknown))} (its sensors: "
+            f"{', '.join(n for n in names if n in actor) or 'none'})",
+            file=str(lock), field="algorithm.teacher_sensors",
+        )  # fmt: skip
+    out = []
+    for name, comp in zip(names, sensors, strict=True):
+        if name in changes:
+            comp = {**(comp if isinstance(comp, dict) else {"type": comp}), **changes[name]}
+        out.append(comp)
+    return out
+
+
 def _actor_sources(recipe: Mapping[str, Any], group: str = "actor") -> list[str]:
     """The sources of a recipe's actor group (its explicit groups or the default one)."""
     groups = (recipe.get("env") or {}).get("groups")
@@ -105,10 +126,12 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
         recipe = dict(recipe)
         student_actor = _actor_sources(recipe, c.actor_group)
         teacher_actor = _actor_sources(teacher)
+        changed = _changed_sensors(teacher.get("sensors") or [], teacher_actor,
+                                   c.teacher_sensors, lock_file)  # fmt: skip
         for slot in ("sensors", "observers"):
             mine = list(recipe.get(slot) or [])
             have = {n: comp for n, comp in zip(_names(mine), mine, strict=True)}
-            for comp in teacher.get(slot) or []:
+            for comp in (changed if slot == "sensors" else teacher.get(slot) or []):
                 name = _names([comp])[0]
                 if name not in teacher_actor:
                     continue
@@ -117,7 +140,8 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
                         f"{slot[:-1]} '{name}' is configured differently from the teacher's "
                         f"({comp} in {lock_file}, {have[name]} here)",
                         field=slot,
-                        hint="use the teacher's settings for a sensor both read",
+                        hint="use the teacher's settings for a sensor both read (with "
+                        "algorithm.teacher_sensors applied)",
                     )
                 if name not in have:
                     mine.append(comp)

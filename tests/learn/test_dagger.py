@@ -107,6 +107,45 @@ def test_a_student_reads_references_as_its_teacher_learned_them(
     assert got["env"]["hinge_elbows"] is False  # and its elbows bent by the angle alone
 
 
+def test_teacher_sensors_label_with_the_base_further_ahead(
+    teacher: Path, tmp_path: Path, capsys
+) -> None:
+    """``algorithm.teacher_sensors`` changes a teacher's own sensor while it labels (its
+    residual's base a frame further ahead): the lock says so, the teacher group reads the
+    later frame, the rest of its input is unchanged; a sensor the teacher lacks is refused."""
+    runs = {}
+    for name, extra in (("plain", ""),
+                        ("lead", "  teacher_sensors: {reference_action: {offset: 2}}\n")):
+        where = tmp_path / name
+        where.mkdir()
+        recipe = student_recipe(where, teacher, extra)
+        assert main(["train", str(recipe), "--steps", str(SAMPLES), "--runs-dir", str(where),
+                     "--no-tensorboard"]) == 0  # fmt: skip
+        runs[name] = where / "student" / "latest"
+    lock = yaml.safe_load((runs["lead"] / "recipe.lock.yaml").read_text())
+    base = next(s for s in lock["sensors"] if s["type"] == "reference_action")
+    assert base["offset"] == 2
+    assert lock["algorithm"]["teacher_sensors"] == {"reference_action": {"offset": 2}}
+    obs = {}
+    for name, run in runs.items():
+        loaded = load_run(run, load_plugins(), num_envs=4)
+        obs[name] = (loaded.env.reset()["teacher"], dict(loaded.env.obs_layout)["teacher"])
+    (plain, layout), (lead, _) = obs["plain"], obs["lead"]
+    at, cols = 0, {}
+    for source, size in layout:
+        cols[source] = slice(at, at + size)
+        at += size
+    same = cols["full_body"]
+    assert torch.equal(plain[:, same], lead[:, same]), "the reference body is read as before"
+    moved = cols["reference_action"]
+    assert (plain[:, moved] - lead[:, moved]).abs().max() > 1e-3, "the base reads a later frame"
+    recipe = student_recipe(tmp_path, teacher, "  teacher_sensors: {three_point: {past: 3}}\n")
+    rc = main(["train", str(recipe), "--steps", "8", "--runs-dir", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert rc != 0 and "teacher_sensors" in err and "'three_point'" in err
+    assert "full_body" in err and "reference_action" in err
+
+
 def test_student_learns_resumes_exactly_and_needs_no_teacher(
     teacher: Path, tmp_path: Path
 ) -> None:
