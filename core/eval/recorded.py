@@ -68,9 +68,12 @@ def drive_recordings(
     hz = resolved.recipe.sim.control_hz
     streams = [resample_stream(rec, hz) for rec in recordings]
     # the sensors' history before the first sample is the standing body, as in a live
-    # session (retarget serve), which starts at the same frame of the same idle clip
-    pasts = [c.instantiate().frames_needed()[0] for c in resolved.of_kind("sensor")]
-    lead = max([1, *pasts])
+    # session (retarget serve), which starts at the same frame of the same idle clip; the
+    # history is read from a bound environment (a sensor such as estimated_body knows its
+    # window only once bound to the character)
+    probe = load_run(run, registry, num_envs=1, clips=[idle_clip(1.0)], **changes)
+    lead = max(1, -min(probe.env.window_offsets))
+    del probe
     seconds = (lead + max(len(s) for s in streams)) / hz + 1.0
     clips = [idle_clip(seconds) for _ in streams]
     loaded = load_run(run, registry, num_envs=len(streams), clips=clips, **changes)

@@ -121,3 +121,25 @@ def test_lost_controllers_are_untracked_in_their_windows_only() -> None:
     assert right[(t >= 3.5) & (t < 3.7)].all() and not right[t < 3.5].any()
     assert left[(t >= 5.0) & (t < 5.2)].all() and not left[(t > 2.3) & (t < 4.9)].any()
     np.testing.assert_array_equal(lost.poses, rec.poses)  # poses kept; play holds them
+
+
+def test_a_run_whose_sensor_knows_its_window_once_bound_plays_a_recording(
+    tmp_path: Path,
+) -> None:
+    """``estimated_body`` learns its device window from the estimator it wraps, when bound to
+    the character; the standing history before a recording is read from the bound
+    environment (the untrained estimator reads three frames: two of history)."""
+    from helpers import TINY
+
+    from retarget.cli.main import main
+
+    recipe = tmp_path / "est.yaml"
+    recipe.write_text(TINY.replace("sensors: [three_point]",
+                                   "sensors: [three_point, estimated_body]"))  # fmt: skip
+    assert main(["train", str(recipe), "--steps", "32", "--runs-dir", str(tmp_path),
+                 "--no-tensorboard"]) == 0  # fmt: skip
+    drive = drive_recordings(str(tmp_path / "tiny" / "latest"), REGISTRY,
+                             [_shorter(read_recording(SAMPLE), 0.5)])  # fmt: skip
+    assert drive.lead == 2 == -min(drive.loaded.env.window_offsets)
+    gaps = follow(drive)[0]
+    assert len(gaps) == drive.lengths[0] - 1 and np.isfinite(gaps).all()
