@@ -128,6 +128,8 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
         teacher_actor = _actor_sources(teacher)
         changed = _changed_sensors(teacher.get("sensors") or [], teacher_actor,
                                    c.teacher_sensors, lock_file)  # fmt: skip
+        trained = dict(zip(_names(teacher.get("sensors") or []), teacher.get("sensors") or [],
+                           strict=True))  # fmt: skip
         for slot in ("sensors", "observers"):
             mine = list(recipe.get(slot) or [])
             have = {n: comp for n, comp in zip(_names(mine), mine, strict=True)}
@@ -135,6 +137,11 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
                 name = _names([comp])[0]
                 if name not in teacher_actor:
                     continue
+                as_trained = name in c.teacher_sensors and have.get(name) == trained.get(name)
+                if slot == "sensors" and as_trained:
+                    # a lock's copy of the teacher's sensor as it trained: changed with it
+                    at = _names(mine).index(name)
+                    mine[at] = have[name] = comp
                 if name in have and have[name] != comp:
                     raise RecipeError(
                         f"{slot[:-1]} '{name}' is configured differently from the teacher's "

@@ -139,6 +139,12 @@ def test_teacher_sensors_label_with_the_base_further_ahead(
     assert torch.equal(plain[:, same], lead[:, same]), "the reference body is read as before"
     moved = cols["reference_action"]
     assert (plain[:, moved] - lead[:, moved]).abs().max() > 1e-3, "the base reads a later frame"
+    again = tmp_path / "again"  # from the plain student's lock, which lists the teacher's
+    assert main(["train", str(runs["plain"] / "recipe.lock.yaml"), "--set",
+                 'algorithm.teacher_sensors={"reference_action": {"offset": 2}}', "--steps",
+                 str(SAMPLES), "--runs-dir", str(again), "--no-tensorboard"]) == 0  # fmt: skip
+    relock = yaml.safe_load(next(again.glob("*/latest/recipe.lock.yaml")).read_text())
+    assert [s.get("offset") for s in relock["sensors"] if s["type"] == "reference_action"] == [2]
     recipe = student_recipe(tmp_path, teacher, "  teacher_sensors: {three_point: {past: 3}}\n")
     rc = main(["train", str(recipe), "--steps", "8", "--runs-dir", str(tmp_path)])
     err = capsys.readouterr().err
