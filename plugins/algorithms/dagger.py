@@ -126,10 +126,9 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
         recipe = dict(recipe)
         student_actor = _actor_sources(recipe, c.actor_group)
         teacher_actor = _actor_sources(teacher)
-        changed = _changed_sensors(teacher.get("sensors") or [], teacher_actor,
-                                   c.teacher_sensors, lock_file)  # fmt: skip
-        trained = dict(zip(_names(teacher.get("sensors") or []), teacher.get("sensors") or [],
-                           strict=True))  # fmt: skip
+        taught = list(teacher.get("sensors") or [])
+        changed = _changed_sensors(taught, teacher_actor, c.teacher_sensors, lock_file)
+        trained = dict(zip(_names(taught), taught, strict=True))
         for slot in ("sensors", "observers"):
             mine = list(recipe.get(slot) or [])
             have = {n: comp for n, comp in zip(_names(mine), mine, strict=True)}
@@ -143,9 +142,11 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
                     at = _names(mine).index(name)
                     mine[at] = have[name] = comp
                 if name in have and have[name] != comp:
+                    source = (f"{lock_file} with algorithm.teacher_sensors"
+                              if slot == "sensors" and name in c.teacher_sensors else lock_file)
                     raise RecipeError(
                         f"{slot[:-1]} '{name}' is configured differently from the teacher's "
-                        f"({comp} in {lock_file}, {have[name]} here)",
+                        f"({comp} from {source}, {have[name]} here)",
                         field=slot,
                         hint="use the teacher's settings for a sensor both read (with "
                         "algorithm.teacher_sensors applied)",

@@ -145,6 +145,14 @@ def test_teacher_sensors_label_with_the_base_further_ahead(
                  str(SAMPLES), "--runs-dir", str(again), "--no-tensorboard"]) == 0  # fmt: skip
     relock = yaml.safe_load(next(again.glob("*/latest/recipe.lock.yaml")).read_text())
     assert [s.get("offset") for s in relock["sensors"] if s["type"] == "reference_action"] == [2]
+    clash = tmp_path / "clash"  # the student's own copy set otherwise: refused, saying why
+    clash.mkdir()
+    recipe = student_recipe(clash, teacher, "  teacher_sensors: {reference_action: {offset: 2}}\n")
+    recipe.write_text(recipe.read_text().replace(
+        "sensors: [three_point]", "sensors: [three_point, {type: reference_action, offset: 5}]"))
+    rc = main(["train", str(recipe), "--steps", "8", "--runs-dir", str(clash)])
+    err = capsys.readouterr().err
+    assert rc != 0 and "configured differently" in err and "with algorithm.teacher_sensors" in err
     recipe = student_recipe(tmp_path, teacher, "  teacher_sensors: {three_point: {past: 3}}\n")
     rc = main(["train", str(recipe), "--steps", "8", "--runs-dir", str(tmp_path)])
     err = capsys.readouterr().err
