@@ -126,9 +126,9 @@ class Dagger(LearnerAlgorithm[DaggerConfig]):
         recipe = dict(recipe)
         student_actor = _actor_sources(recipe, c.actor_group)
         teacher_actor = _actor_sources(teacher)
-        taught = list(teacher.get("sensors") or [])
-        changed = _changed_sensors(taught, teacher_actor, c.teacher_sensors, lock_file)
-        trained = dict(zip(_names(taught), taught, strict=True))
+        own = list(teacher.get("sensors") or [])
+        changed = _changed_sensors(own, teacher_actor, c.teacher_sensors, lock_file)
+        trained = dict(zip(_names(own), own, strict=True))
         for slot in ("sensors", "observers"):
             mine = list(recipe.get(slot) or [])
             have = {n: comp for n, comp in zip(_names(mine), mine, strict=True)}
