@@ -8,7 +8,9 @@ of the corpus (PHC's protocol: one run per clip, first frame to last) and compar
 simulated head and hands at step ``t`` with the reference's at ``t - k`` for every lag ``k``
 up to ``--max-lag`` steps, over the tracked steps: the error at ``k = 0`` is the report's
 ``headset_cm`` / ``controller_cm``; the smallest over ``k`` is what is left when the lag is
-forgiven, and its ``k`` is the lag.
+forgiven, and its ``k`` is the lag. At ``k = 0`` it also gives each device's mean error as a
+vector in the reference headset's heading frame (forward, left, up): a body that is steadily
+behind, lower or wider than the reference shows there as a bias rather than as noise.
 
     python benchmarks/device_lag.py pretrained:human-three_point-student --kinds walk,turn \
         --max-clips 8 --out results/device_lag.json
@@ -28,10 +30,13 @@ from heldout_eval import KINDS, corpus_files
 
 from retarget.eval.terms import MetricTerm
 
+SITES = ("head", "left_hand", "right_hand")
+
 
 class LagRecorder(MetricTerm):
-    """Keeps every step's simulated and reference head and hand positions (no columns: the
-    lags are computed over all runs once the evaluation ends)."""
+    """Keeps every step's simulated and reference head and hand positions and the reference
+    headset's heading (no columns: the lags are computed over all runs once the evaluation
+    ends)."""
 
     columns = ()
 
@@ -47,13 +52,15 @@ class LagRecorder(MetricTerm):
         s, r = step.ctx.sim, step.ctx.ref.pose
         sites = [self.head, *self.hands]
         self._steps.append((s.site_pos[:, sites].clone(), r.site_pos[:, sites].clone(),
-                            step.ok.clone()))  # fmt: skip
+                            step.ok.clone(), r.site_quat[:, self.head].clone()))  # fmt: skip
 
     def finish(self, batch) -> dict[str, np.ndarray]:
         if self._steps:
             k = batch.runs
-            sim, ref, ok = (torch.stack(x)[:, :k].numpy() for x in zip(*self._steps, strict=True))
-            self.batches.append({"sim": sim, "ref": ref, "ok": ok})  # (T, runs, 3 sites, 3)
+            sim, ref, ok, quat = (torch.stack(x)[:, :k].numpy()
+                                  for x in zip(*self._steps, strict=True))  # fmt: skip
+            # (T, runs, 3 sites, 3); quat (T, runs, 4): the reference headset's orientation
+            self.batches.append({"sim": sim, "ref": ref, "ok": ok, "head_quat": quat})
         return {}
 
 
@@ -79,6 +86,26 @@ def lag_errors(batches: list[dict[str, np.ndarray]], max_lag: int) -> dict[str, 
             "head_up_cm": mean[:, 2].tolist()}  # fmt: skip
 
 
+def device_bias(batches: list[dict[str, np.ndarray]]) -> dict[str, list[float]]:
+    """Per device (``head``, ``left_hand``, ``right_hand``): the mean of ``sim - ref`` at lag
+    0, in cm, turned into the reference headset's heading frame (forward, left, up), over the
+    tracked steps."""
+    from retarget.geometry.rotations import yaw
+
+    sums, count = np.zeros((len(SITES), 3)), 0
+    for b in batches:
+        ok = b["ok"].astype(bool)
+        d = (b["sim"] - b["ref"])[ok]  # (M, 3 sites, 3)
+        h = yaw(b["head_quat"][ok])[:, None]  # (M, 1)
+        c, s = np.cos(h), np.sin(h)
+        local = np.stack([c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1],
+                          d[..., 2]], axis=-1)  # fmt: skip
+        sums += local.sum(0)
+        count += len(d)
+    mean = sums / max(count, 1) * 100
+    return {name: mean[i].round(3).tolist() for i, name in enumerate(SITES)}
+
+
 def measure(run: str, files: list[Path], num_envs: int, max_lag: int,
             sets: list[str] = ()) -> dict:  # fmt: skip
     from retarget.eval import EvalSettings, evaluate
@@ -94,7 +121,7 @@ def measure(run: str, files: list[Path], num_envs: int, max_lag: int,
     if not isinstance(loaded.algorithm, Acting):
         raise SystemExit(f"{run}: not a policy that acts")
     layout = loaded.env.layout
-    rec = LagRecorder(layout.site("head"), [layout.site("left_hand"), layout.site("right_hand")])
+    rec = LagRecorder(layout.site(SITES[0]), [layout.site(name) for name in SITES[1:]])
     report = evaluate(loaded.env, loaded.algorithm.act, EvalSettings(every=10**9,
                       max_seconds=3600.0), terms=[rec])  # fmt: skip
     lags = lag_errors(rec.batches, max_lag)
@@ -107,6 +134,7 @@ def measure(run: str, files: list[Path], num_envs: int, max_lag: int,
         "head_up_cm_at_lag": float(lags["head_up_cm"][int(head.argmin())]),
         "hands_cm_now": float(hands[0]), "hands_cm_best": float(hands.min()),
         "hands_lag_steps": int(hands.argmin()),
+        "bias_cm": device_bias(rec.batches),
         "by_lag": lags,
     }  # fmt: skip
 
@@ -137,6 +165,9 @@ def main() -> int:
                   f"{r['head_up_cm_at_lag']:.1f}); hands "
                   f"{r['hands_cm_now']:.1f} cm, {r['hands_cm_best']:.1f} cm at "
                   f"{r['hands_lag_steps']}", flush=True)
+            print("  mean error (forward, left, up) cm: " + "; ".join(
+                f"{name} {', '.join(f'{v:+.1f}' for v in r['bias_cm'][name])}"
+                for name in SITES), flush=True)  # fmt: skip
     if args.out:
         args.out.write_text(json.dumps(results, indent=2))
     return 0

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parents[2] / "benchmarks"))
-from device_lag import lag_errors, measure
+from device_lag import device_bias, lag_errors, measure
 
 from retarget.motion.bvh_write import write_bvh
 from retarget.motion.procedural import default_motions
@@ -39,6 +39,24 @@ def test_steps_not_tracked_are_left_out() -> None:
     assert lag_errors([{"sim": sim, "ref": ref, "ok": ok}], max_lag=0)["head_cm"][0] == 0.0
 
 
+def test_a_steady_offset_is_reported_in_the_headset_heading_frame() -> None:
+    """A body 2 cm lower than the reference with its left hand 3 cm further left, walking
+    along world +y (heading 90 degrees): forward/left/up are the walker's, not the world's."""
+    ref = np.zeros((20, 2, 3, 3))
+    sim = ref.copy()
+    sim[..., 2] -= 0.02
+    sim[:, :, 1, 0] -= 0.03  # world -x is the walker's left when it faces +y
+    quat = np.zeros((20, 2, 4))
+    quat[..., 0] = quat[..., 3] = np.sqrt(0.5)  # 90 degrees about +z
+    ok = np.ones((20, 2), dtype=bool)
+    ok[10:, 1] = False
+    sim[10:, 1] += 5.0  # a failed run's steps are left out
+    bias = device_bias([{"sim": sim, "ref": ref, "ok": ok, "head_quat": quat}])
+    np.testing.assert_allclose(bias["head"], [0.0, 0.0, -2.0], atol=1e-6)
+    np.testing.assert_allclose(bias["left_hand"], [0.0, 3.0, -2.0], atol=1e-6)
+    np.testing.assert_allclose(bias["right_hand"], [0.0, 0.0, -2.0], atol=1e-6)
+
+
 def test_a_shipped_student_is_measured_on_a_clip(tmp_path: Path) -> None:
     """A real rollout: the pretrained three-point student on a generated walk."""
     clip = write_bvh(default_motions(names=("walk",))[0], tmp_path / "walk.bvh")
@@ -46,3 +64,5 @@ def test_a_shipped_student_is_measured_on_a_clip(tmp_path: Path) -> None:
     assert len(r["by_lag"]["head_cm"]) == 5 and r["clips"] == 1
     assert 0 < r["head_cm_best"] <= r["head_cm_now"] < 100
     assert 0 <= r["head_lag_steps"] <= 4
+    assert set(r["bias_cm"]) == {"head", "left_hand", "right_hand"}
+    assert all(len(v) == 3 and np.isfinite(v).all() for v in r["bias_cm"].values())
