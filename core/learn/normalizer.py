@@ -10,7 +10,7 @@ observation of one rollout is scaled the same way.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, Any, cast
 
 import torch
 from torch import nn
@@ -25,6 +25,7 @@ class RunningNormalizer(nn.Module):
     mean: torch.Tensor
     var: torch.Tensor
     count: torch.Tensor
+    frozen: torch.Tensor
 
     def __init__(
         self, dim: int, *, clip: float = 10.0, eps: float = 1e-8, max_count: float | None = None
@@ -34,6 +35,15 @@ class RunningNormalizer(nn.Module):
         self.register_buffer("mean", torch.zeros(dim, dtype=torch.float64))
         self.register_buffer("var", torch.ones(dim, dtype=torch.float64))
         self.register_buffer("count", torch.zeros((), dtype=torch.float64))
+        # columns whose statistics no longer change: the inputs a warm-started network was
+        # trained on (retarget.learn.widen), so they keep meaning what its weights learned
+        self.register_buffer("frozen", torch.zeros(dim, dtype=torch.bool))
+
+    def _load_from_state_dict(self, state_dict: dict[str, Any], prefix: str, *args: Any,
+                              **kwargs: Any) -> None:  # fmt: skip
+        """States saved before ``frozen`` existed load with no column frozen."""
+        state_dict.setdefault(prefix + "frozen", torch.zeros_like(self.frozen))
+        super()._load_from_state_dict(state_dict, prefix, *args, **kwargs)
 
     @torch.no_grad()
     def update(self, x: torch.Tensor) -> None:
@@ -46,12 +56,14 @@ class RunningNormalizer(nn.Module):
     def merge(self, n: float | torch.Tensor, mean: torch.Tensor, var: torch.Tensor) -> None:
         """Merge statistics of ``n`` samples (Chan et al.). With ``max_count`` the running
         count saturates, so old samples fade out: statistics that drift during training (the
-        returns of an improving policy) are followed instead of averaged over all history."""
+        returns of an improving policy) are followed instead of averaged over all history.
+        Frozen columns keep their mean and variance."""
         total = self.count + n
         delta = mean - self.mean
         m2 = self.var * self.count + var * n + delta.square() * self.count * n / total
-        self.mean += delta * n / total
-        self.var.copy_(m2 / total)
+        keep = ~self.frozen
+        self.mean[keep] += (delta * n / total)[keep]
+        self.var[keep] = (m2 / total)[keep]
         self.count.copy_(total if self.max_count is None else total.clamp(max=self.max_count))
 
     @torch.no_grad()

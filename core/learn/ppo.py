@@ -446,8 +446,8 @@ class PPOLearner:
         if "critic" in state:
             widen_module(self.critic, state["critic"], inputs[self.critic_key])
             self.value_norm.load_state_dict(state["value_norm"])
-        # the old statistics count as ten rollouts: new inputs find their scale in a few
-        # iterations while the kept ones barely move
+        # the kept inputs' statistics are frozen (the weights were learned with them); the
+        # whole counts as ten rollouts, so new inputs find their scale in a few iterations
         count = 10.0 * self.config.rollout_steps * self.num_envs
         widen_group_normalizers(self.obs_norm.groups, state["obs_norm"], inputs, count)
         self.last_obs = None

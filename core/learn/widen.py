@@ -55,14 +55,18 @@ def widen_module(module: nn.Module, old: Mapping[str, torch.Tensor], index: torc
 def widen_normalizer(
     module: nn.Module, old: Mapping[str, torch.Tensor], index: torch.Tensor, count: float
 ) -> None:
-    """Running statistics of the kept columns, weighted as ``count`` samples; new columns start
-    empty (mean 0, variance 0).
+    """Running statistics of the kept columns, frozen; new columns start empty (mean 0,
+    variance 0) and learn theirs, the whole weighted as ``count`` samples.
 
     The small count is what lets the new columns learn their scale: merged with a count of
     millions, their statistics would never move from the start, and a height map (a few cm
     spread) read unscaled would need weights ~30x larger than every other input, which Adam's
-    fixed step size takes ~30x longer to grow. The kept columns' statistics, from the same
-    character on similar motion, move little when merged with the new run's samples.
+    fixed step size takes ~30x longer to grow. The kept columns are frozen because the weights
+    that read them were learned with those statistics: merged with the new run's samples they
+    move wherever the new run's states differ (a distilled three-point student fine-tuned by
+    PPO visits falls and hard starts its distillation never did), and the same weights then
+    compute another policy. Frozen, the warm-started network computes exactly what the old one
+    did until training moves its weights.
     """
     known = index >= 0
     mean = torch.zeros_like(module.mean)
@@ -70,7 +74,7 @@ def widen_normalizer(
     mean[known] = old["mean"][index[known]].to(mean.dtype)
     var[known] = old["var"][index[known]].to(var.dtype)
     total = torch.as_tensor(min(float(old["count"]), count), dtype=module.count.dtype)
-    module.load_state_dict({"mean": mean, "var": var, "count": total})
+    module.load_state_dict({"mean": mean, "var": var, "count": total, "frozen": known})
 
 
 def sub_state(state: Mapping[str, torch.Tensor], prefix: str) -> dict[str, torch.Tensor]:

@@ -119,3 +119,28 @@ def test_new_inputs_learn_their_scale_while_kept_ones_stay() -> None:
     assert torch.allclose(new.var[[0, 2]], torch.tensor([100.0, 1.0], dtype=torch.float64))
     assert abs(float(new.mean[1]) - 0.05 * 10 / 11) < 0.01
     assert 1e-4 < float(new.var[1]) < 0.01  # its own scale, not the unit variance of a default
+
+
+def test_kept_inputs_keep_their_statistics_when_the_new_run_visits_other_states() -> None:
+    """A warm-started network reads its kept inputs as it was trained to, however different
+    the new run's states are (a distilled student fine-tuned with PPO falls where it never
+    did); a new input still learns its scale; a state saved before freezing loads."""
+    from retarget.learn.normalizer import RunningNormalizer
+
+    old = RunningNormalizer(2)
+    old.update(torch.tensor([[0.0, 10.0], [2.0, 30.0]]).repeat(5000, 1))  # mean 1, 20; var 1, 100
+    new = RunningNormalizer(3)
+    widen_normalizer(new, old.state_dict(), torch.tensor([1, -1, 0]), count=1000.0)
+    assert new.frozen.tolist() == [True, False, True]
+    far = torch.full((1000,), 80.0), torch.rand(1000), torch.full((1000,), 5.0)
+    shifted = torch.stack(far, 1)
+    for _ in range(10):
+        new.update(shifted)
+    assert new.mean[[0, 2]].tolist() == [20.0, 1.0] and new.var[[0, 2]].tolist() == [100.0, 1.0]
+    assert 0.4 < float(new.mean[1]) < 0.5  # 10 of 11 parts new data around 0.5
+    legacy = {k: v for k, v in new.state_dict().items() if k != "frozen"}
+    loaded = RunningNormalizer(3)
+    loaded.load_state_dict(legacy)
+    assert not loaded.frozen.any() and loaded.mean.tolist() == new.mean.tolist()
+    loaded.update(shifted)
+    assert float(loaded.mean[0]) > 20.0  # nothing frozen: every column follows the data
