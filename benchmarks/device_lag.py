@@ -90,17 +90,14 @@ def device_bias(batches: list[dict[str, np.ndarray]]) -> dict[str, list[float]]:
     """Per device (``head``, ``left_hand``, ``right_hand``): the mean of ``sim - ref`` at lag
     0, in cm, turned into the reference headset's heading frame (forward, left, up), over the
     tracked steps."""
-    from retarget.geometry.rotations import yaw
+    from retarget.geometry.heading import to_heading_vectors
 
     sums, count = np.zeros((len(SITES), 3)), 0
     for b in batches:
         ok = b["ok"].astype(bool)
-        d = (b["sim"] - b["ref"])[ok]  # (M, 3 sites, 3)
-        h = yaw(b["head_quat"][ok])[:, None]  # (M, 1)
-        c, s = np.cos(h), np.sin(h)
-        local = np.stack([c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1],
-                          d[..., 2]], axis=-1)  # fmt: skip
-        sums += local.sum(0)
+        d = torch.from_numpy((b["sim"] - b["ref"])[ok]).double()  # (M, 3 sites, 3)
+        local = to_heading_vectors(d, torch.from_numpy(b["head_quat"][ok]).double())
+        sums += local.sum(0).numpy()
         count += len(d)
     mean = sums / max(count, 1) * 100
     return {name: mean[i].round(3).tolist() for i, name in enumerate(SITES)}
