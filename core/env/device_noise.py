@@ -91,12 +91,32 @@ class DeviceNoise:
         if not bool((self.lost_from >= 0).any()):
             return devices
         out = devices.clone()
-        at = frame[:, None] + torch.as_tensor(window, dtype=torch.long)[None, :]  # (N, W)
+        masks = self._held(frame, window)  # (N, W, controllers)
         for j, d in enumerate(self.CONTROLLERS):
-            lost = self.lost_from[:, j]
-            held = pose_at(lost.clamp(min=0))[:, d]  # (N, 7)
-            mask = (lost[:, None] >= 0) & (at >= lost[:, None])  # (N, W)
+            held = pose_at(self.lost_from[:, j].clamp(min=0))[:, d]  # (N, 7)
+            mask = masks[..., j]
             out[:, :, d] = torch.where(mask[..., None], held[:, None].to(out.dtype), out[:, :, d])
+        return out
+
+    def _held(self, frame: torch.Tensor, window: Sequence[int]) -> torch.Tensor:
+        """``(N, W, controllers)`` bool: which window entries show a lost controller's held
+        pose (entries from the frame it was lost on)."""
+        at = frame.long()[:, None] + torch.as_tensor(window, dtype=torch.long)[None, :]
+        lost = self.lost_from[:, None, :]  # (N, 1, controllers)
+        return (lost >= 0) & (at[..., None] >= lost)
+
+    def tracked(self, tracked: torch.Tensor, frame: torch.Tensor,
+                window: Sequence[int]) -> torch.Tensor:  # fmt: skip
+        """``tracked`` ``(N, W, D)`` with the entries :meth:`hold` held at this ``frame`` set
+        false: the runtime reports a lost controller as untracked while it holds its pose, so
+        a policy that reads the flag learns when the held pose is not the hand's. Call after
+        :meth:`hold` of the same step; unchanged when inactive or ``lost`` is 0."""
+        if not self.active or self.options.lost <= 0.0 or not bool((self.lost_from >= 0).any()):
+            return tracked
+        out = tracked.clone()
+        held = self._held(frame, window)
+        for j, d in enumerate(self.CONTROLLERS):
+            out[:, :, d] &= ~held[..., j]
         return out
 
     def apply(self, devices: torch.Tensor) -> torch.Tensor:

@@ -291,11 +291,13 @@ class RetargetEnv:
     def _context(self, action: torch.Tensor) -> StepContext:
         lib = self.library
         rows = lib.rows(self.clip, self.frame)[:, 0]
-        devices = lib.devices[lib.rows(self.clip, self.frame, self.window_offsets)]
+        window = lib.rows(self.clip, self.frame, self.window_offsets)
+        devices, tracked = lib.devices[window], lib.devices_tracked[window]
         if self.device_noise is not None:
             devices = self.device_noise.apply(devices)
             devices = self.device_noise.hold(devices, self.frame, self.window_offsets,
                                              self._noisy_devices_at)  # fmt: skip
+            tracked = self.device_noise.tracked(tracked, self.frame, self.window_offsets)
         need = self._needs
         ahead = {}
         if need.reference_offsets:
@@ -312,6 +314,7 @@ class RetargetEnv:
             future=ahead,
             rows=rows,
             scene_contacts=self.reference.scene_contacts[rows] if need.scene_contacts else None,
+            devices_tracked=tracked,
         )
         return StepContext(
             layout=self.layout,

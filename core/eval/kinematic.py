@@ -94,11 +94,12 @@ class KinematicRollout:
                 force[:, bodies] = down[:, None]
         sim = replace(sim, contact_force=force, contact_force_up=force)
         labels = env.reference.scene_contacts
+        window = lib.rows(clip, frame, env.window_offsets)
         ref = ReferenceBatch(
-            pose=env.reference.pose(rows),
-            devices=lib.devices[lib.rows(clip, frame, env.window_offsets)],
+            pose=env.reference.pose(rows), devices=lib.devices[window],
             window_offsets=tuple(env.window_offsets), contacts=lib.contacts[rows], rows=rows,
             scene_contacts=labels[rows] if labels is not None else None,
+            devices_tracked=lib.devices_tracked[window],
         )  # fmt: skip
         n, nu = rows.shape[0], len(env.layout.actuator_names)
         zeros = torch.zeros(n, nu)

@@ -58,7 +58,7 @@ def drive_recordings(
     """
     import torch
 
-    from retarget.motion.device_stream import align_to, resample_stream
+    from retarget.motion.device_stream import align_to, resample_stream, resample_tracked
     from retarget.motion.procedural import idle_clip
     from retarget.train.load import load_run, locked_recipe
     from retarget.train.run_dir import resolve_run
@@ -88,6 +88,9 @@ def drive_recordings(
         lib.devices[torch.as_tensor(at)] = torch.as_tensor(aligned, dtype=lib.devices.dtype)
         end = int(lib.start[k]) + int(lib.length[k])
         lib.devices[at[-1] + 1 : end] = lib.devices[int(at[-1])]  # the user stands still
+        tracked = torch.as_tensor(resample_tracked(recordings[k], hz))
+        lib.devices_tracked[torch.as_tensor(at)] = tracked
+        lib.devices_tracked[at[-1] + 1 : end] = tracked[-1]
         rows.append(at)
     return RecordedDrive(loaded, lead, [len(s) for s in streams], rows)
 

@@ -143,6 +143,18 @@ class ReferenceBatch:
     """``(N, G)`` bool when some plugin needs it: whether the kinematic reference touches the
     scene (floor included) with each body group, one column per group of
     ``Layout.body_groups`` in its order (computed once per library frame, not per step)."""
+    devices_tracked: torch.Tensor | None = None
+    """``(N, W, D)`` bool: whether each device was tracked at each entry of ``devices``
+    (false: the runtime lost it and ``devices`` holds its last tracked pose, as a headset
+    runtime reports and holds it); ``None`` means every device was tracked."""
+
+    def tracked(self) -> torch.Tensor:
+        """``devices_tracked``, or all true when the reference gives none."""
+        import torch
+
+        if self.devices_tracked is not None:
+            return self.devices_tracked
+        return torch.ones(self.devices.shape[:-1], dtype=torch.bool, device=self.devices.device)
 
     def select(self, idx: torch.Tensor) -> ReferenceBatch:
         return replace(
@@ -153,6 +165,7 @@ class ReferenceBatch:
             contacts=self.contacts[idx],
             scene_contacts=None if self.scene_contacts is None else self.scene_contacts[idx],
             rows=None if self.rows is None else self.rows[idx],
+            devices_tracked=None if self.devices_tracked is None else self.devices_tracked[idx],
         )
 
 

@@ -73,6 +73,7 @@ class LiveSession:
         before = lib.rows(torch.zeros(1, dtype=torch.long), torch.tensor([self.frame0 - 1]),
                           tuple(env.window_offsets))[0]  # fmt: skip
         self.window = lib.devices[before].double().numpy()  # world, oldest first
+        self.window_tracked = np.ones(self.window.shape[:2], dtype=bool)  # (W, 3)
         env.place(torch.zeros(1, dtype=torch.long), torch.tensor([self.frame0]))
         self.held = start.copy()  # room frame after calibration; world before the first sample
         self.calibration: Calibration | None = None
@@ -106,10 +107,13 @@ class LiveSession:
         if self.latest is not None and self.calibration is not None:
             # the mapping a recording gets (align_to: move_poses), so live equals play --input
             current = self.calibration.to_world(self.latest.poses)
+            tracked = self.latest.tracked
         else:
-            current = self.window[-1]
+            current, tracked = self.window[-1], self.window_tracked[-1]
         self.window = np.concatenate([self.window[1:], current[None]], axis=0)
+        self.window_tracked = np.concatenate([self.window_tracked[1:], tracked[None]], axis=0)
         lib.devices[self.rows] = torch.as_tensor(self.window, dtype=lib.devices.dtype)
+        lib.devices_tracked[self.rows] = torch.as_tensor(self.window_tracked)
         if self.image_sensors:
             self._replay_images()
         with torch.no_grad():

@@ -31,14 +31,30 @@ def hold_untracked(rec: DeviceRecording) -> np.ndarray:
     return poses
 
 
-def resample_stream(rec: DeviceRecording, hz: float) -> np.ndarray:
-    """The stream at ``hz`` from its first to its last sample: ``(F, 3, 7)``."""
-    poses = hold_untracked(rec)
+def _sample_at(rec: DeviceRecording, hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """For each control frame from the first sample to the last: the sample at or before it
+    and the one after it (the last sample twice at the end)."""
     t = rec.time - rec.time[0]
     frames = int(np.floor(t[-1] * hz + 1e-9)) + 1
     query = np.arange(frames) / hz
     k = np.clip(np.searchsorted(t, query, side="right") - 1, 0, len(t) - 1)
-    k1 = np.minimum(k + 1, len(t) - 1)
+    return k, np.minimum(k + 1, len(t) - 1)
+
+
+def resample_tracked(rec: DeviceRecording, hz: float) -> np.ndarray:
+    """Whether each device is tracked at each control frame of :func:`resample_stream`:
+    ``(F, 3)`` bool, the state of the sample at or before the frame (a pose between a tracked
+    sample and a lost one is the held pose, as the runtime reports it)."""
+    k, _ = _sample_at(rec, hz)
+    return rec.tracked[k].astype(bool)
+
+
+def resample_stream(rec: DeviceRecording, hz: float) -> np.ndarray:
+    """The stream at ``hz`` from its first to its last sample: ``(F, 3, 7)``."""
+    poses = hold_untracked(rec)
+    t = rec.time - rec.time[0]
+    k, k1 = _sample_at(rec, hz)
+    query = np.arange(len(k)) / hz
     span = np.where(k1 > k, t[k1] - t[k], 1.0)
     w = np.clip((query - t[k]) / span, 0.0, 1.0)[:, None, None]
     pos = poses[k, :, :3] * (1 - w) + poses[k1, :, :3] * w

@@ -79,6 +79,10 @@ class MotionLibrary:
         self.global_pos = t(cat(lambda c: c.global_pos))
         self.global_rot = t(cat(lambda c: c.global_rot))
         self.devices = t(cat(lambda c: device_poses(c.global_pos, c.global_rot, c.height)))
+        self.devices_tracked = torch.ones(self.devices.shape[:-1], dtype=torch.bool,
+                                          device=device)  # fmt: skip
+        """``(frames, 3)``: whether each device was tracked; all true for motion capture, a
+        recorded or live stream's untracked samples false (their pose in ``devices`` held)."""
         self.contacts = t(cat(lambda c: c.contacts), torch.bool)
         self.heights = t(np.array([c.height for c in items]))
         self.bones = t(np.stack([c.offsets for c in items]))

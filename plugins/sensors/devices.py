@@ -46,6 +46,13 @@ class ThreePointConfig(HmdConfig):
     controller_rotation: bool = Field(
         True, description="include controller orientations; false = positions only (QuestEnvSim)"
     )
+    tracking: bool = Field(
+        False,
+        description="append, per frame, whether each controller is tracked (1) or lost (0, "
+        "its last pose held), as headset runtimes report it; without it a held controller "
+        "looks like a still hand, and a policy trained with lost controllers "
+        "(env.device_noise.lost) learns to distrust every still one",
+    )
 
 
 DeviceConfigT = TypeVar("DeviceConfigT", bound=HmdConfig, default=HmdConfig)
@@ -145,24 +152,28 @@ class ThreePoint(_DeviceSensor[ThreePointConfig]):
     Per frame: headset position (3) + 6D orientation (6), then left and right controller
     position (3 each) + 6D orientation (6 each) when ``controller_rotation`` (27 values), or
     positions only (15 values), QuestEnvSim's choice since controller orientation depends on how
-    a user holds them.
+    a user holds them; with ``tracking``, then the left and right controller's tracked flag.
     """
 
     name = "three_point"
     requires = ("site:head", "site:left_hand", "site:right_hand")
 
     def _features_per_frame(self) -> int:
-        return 27 if self.config.controller_rotation else 15
+        return (27 if self.config.controller_rotation else 15) + (2 if self.config.tracking else 0)
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
         import torch
         pos, rot = self._devices(ctx, 3)
+        n, frames = pos.shape[:2]
         if self.config.controller_rotation:
-            per_device = torch.cat([pos, rot], dim=-1)  # (N, F, 3, 9)
+            per_frame = torch.cat([pos, rot], dim=-1).flatten(2)  # (N, F, 27)
         else:
             hmd = torch.cat([pos[:, :, :1], rot[:, :, :1]], dim=-1).flatten(2)  # (N, F, 9)
-            per_device = torch.cat([hmd, pos[:, :, 1:].flatten(2)], dim=-1)  # (N, F, 15)
-        return per_device.reshape(ctx.num_envs, -1).float()
+            per_frame = torch.cat([hmd, pos[:, :, 1:].flatten(2)], dim=-1)  # (N, F, 15)
+        if self.config.tracking:
+            tracked = ctx.ref.tracked()[:, self._window(tuple(ctx.ref.window_offsets)), 1:3]
+            per_frame = torch.cat([per_frame, tracked.to(per_frame.dtype)], dim=-1)
+        return per_frame.reshape(n, frames * self._features_per_frame()).float()
 
 
 @retarget.hookimpl

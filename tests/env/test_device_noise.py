@@ -154,3 +154,19 @@ def test_the_env_holds_a_lost_controller_in_training() -> None:
     lib = env.library
     held = lib.devices[lib.rows(env.clip[n : n + 1], lost[n : n + 1])[:, 0]][0, 1]
     torch.testing.assert_close(ctx.ref.devices[n, -1, 1], held.to(ctx.ref.devices.dtype))
+
+
+def test_a_held_controller_is_reported_untracked_while_it_is_held() -> None:
+    env = _env(16, "env.device_noise={height: 0.0, scale: 0.0, lost: 10.0, lost_seconds: 2.0}")
+    env.reset()
+    env.device_noise.active = True
+    for _ in range(12):
+        ctx = env._context(torch.zeros(16, env.action_dim))
+        tracked, lost = ctx.ref.devices_tracked, env.device_noise.lost_from
+        assert tracked is not None and tracked[..., 0].all()  # the headset is never lost
+        for j, d in enumerate(DeviceNoise.CONTROLLERS):  # the current entry: lost now or not
+            assert torch.equal(~tracked[:, -1, d], lost[:, j] >= 0)
+        env.frame = env.frame + 1
+    assert not tracked.all()
+    env.device_noise.active = False  # evaluation: every device tracked
+    assert env._context(torch.zeros(16, env.action_dim)).ref.devices_tracked.all()

@@ -123,6 +123,22 @@ def test_lost_controllers_are_untracked_in_their_windows_only() -> None:
     np.testing.assert_array_equal(lost.poses, rec.poses)  # poses kept; play holds them
 
 
+def test_a_recordings_lost_controllers_reach_the_sensors_as_untracked() -> None:
+    """A controller the recording marks untracked is held and flagged in the library rows
+    the environment reads, so a student with ``three_point.tracking`` sees it lost."""
+    from retarget.motion.device_stream import resample_tracked
+
+    rec = _shorter(read_recording(SAMPLE), 3.0)
+    rec = lose_controllers(type(rec)(rec.time, rec.poses, np.ones_like(rec.tracked)), 0.25)
+    drive = drive_recordings(RUN, REGISTRY, [rec])
+    lib, rows = drive.loaded.env.library, torch.as_tensor(drive.rows[0])
+    want = torch.as_tensor(resample_tracked(rec, lib.fps))
+    assert not want[:, 1].all()  # the left controller is lost from 2.0 s
+    assert torch.equal(lib.devices_tracked[rows], want)
+    assert lib.devices_tracked[: int(rows[0])].all()  # the standing history is tracked
+    assert bool(lib.devices_tracked[int(rows[-1]) + 1 :, 1].all()) == bool(want[-1, 1])
+
+
 def test_a_run_whose_sensor_knows_its_window_once_bound_plays_a_recording(
     tmp_path: Path,
 ) -> None:

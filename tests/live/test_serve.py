@@ -168,6 +168,26 @@ def test_the_session_follows_a_recording_as_play_input_does(run) -> None:
     np.testing.assert_allclose(np.array(got), np.array(want), atol=1e-4)
 
 
+def test_an_untracked_controller_is_held_and_flagged_in_the_sensors_window(run) -> None:
+    from retarget.live.session import LiveSession
+    from retarget.motion.procedural import idle_clip
+    from retarget.train.load import load_run
+
+    live = LiveSession(load_run(run, load_plugins(), num_envs=1, clips=[idle_clip(4.0)]))
+    lib, rows = live.env.library, live.rows
+    poses = lib.devices[rows[-1]].double().numpy()
+    live.push(0.0, poses, np.ones(3, dtype=bool), "retarget")
+    live.step()
+    assert lib.devices_tracked[rows].all()
+    moved = poses.copy()
+    moved[2, 0] += 0.3  # the right controller's last reading is not its pose: it is lost
+    live.push(0.03, moved, np.array([True, True, False]), "retarget")
+    live.step()
+    assert lib.devices_tracked[rows[:-1]].all()
+    assert lib.devices_tracked[rows[-1]].tolist() == [True, True, False]
+    torch.testing.assert_close(lib.devices[rows[-1], 2], lib.devices[rows[-2], 2])  # held
+
+
 def test_an_image_student_is_served_with_the_headsets_camera_frames(tmp_path) -> None:
     """A recording with frames streams to an image student: every step answered, no error."""
     from helpers import image_student

@@ -7,7 +7,12 @@ import pytest
 
 from retarget.geometry import rotations as rot
 from retarget.motion.device_recording import DeviceRecording
-from retarget.motion.device_stream import align_to, hold_untracked, resample_stream
+from retarget.motion.device_stream import (
+    align_to,
+    hold_untracked,
+    resample_stream,
+    resample_tracked,
+)
 
 Z = np.array([0.0, 0.0, 1.0])
 
@@ -43,6 +48,16 @@ def test_untracked_samples_hold_the_last_tracked_pose() -> None:
     assert np.isfinite(held).all()
     np.testing.assert_array_equal(held[10:20, 2], np.repeat(rec.poses[9:10, 2], 10, axis=0))
     np.testing.assert_array_equal(held[:5, 1], np.repeat(rec.poses[5:6, 1], 5, axis=0))
+
+
+def test_resampled_frames_say_which_devices_were_tracked() -> None:
+    rec = recording()  # 90 Hz from t = 0.25
+    rec.tracked[11:19, 2] = False  # samples 11..18: 0.122 .. 0.200 s into the stream
+    flags = resample_tracked(rec, 36.0)
+    assert flags.shape == resample_stream(rec, 36.0).shape[:2]
+    assert flags[:, :2].all()
+    lost = np.flatnonzero(~flags[:, 2])
+    np.testing.assert_array_equal(lost, [5, 6, 7])  # frames at 0.139 .. 0.194 s
 
 
 def test_calibration_puts_the_first_headset_on_the_target_and_keeps_the_geometry() -> None:
