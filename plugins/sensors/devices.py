@@ -29,7 +29,7 @@ DEVICES = ("headset", "left", "right")
 """Device order along the ``D`` axis of ``ref.devices``."""
 
 
-class HmdConfig(PluginConfig):
+class DeviceWindowConfig(PluginConfig):
     past: int = Field(
         1,
         ge=0,
@@ -37,6 +37,9 @@ class HmdConfig(PluginConfig):
         "consecutive readings (past 1) so that the policy can infer the user's velocity",
     )
     future: int = Field(0, ge=0, description="future frames after the current one (offline only)")
+
+
+class HmdConfig(DeviceWindowConfig):
     keep_height: bool = Field(
         True, description="positions keep world height; false makes them relative to the root"
     )
@@ -46,20 +49,14 @@ class ThreePointConfig(HmdConfig):
     controller_rotation: bool = Field(
         True, description="include controller orientations; false = positions only (QuestEnvSim)"
     )
-    tracking: bool = Field(
-        False,
-        description="append, per frame, whether each controller is tracked (1) or lost (0, "
-        "its last pose held), as headset runtimes report it; without it a held controller "
-        "looks like a still hand, and a policy trained with lost controllers "
-        "(env.device_noise.lost) learns to distrust every still one",
-    )
 
 
-DeviceConfigT = TypeVar("DeviceConfigT", bound=HmdConfig, default=HmdConfig)
+DeviceConfigT = TypeVar("DeviceConfigT", bound=DeviceWindowConfig, default=DeviceWindowConfig)
+PoseConfigT = TypeVar("PoseConfigT", bound=HmdConfig, default=HmdConfig)
 
 
-class _DeviceSensor(Sensor[DeviceConfigT]):
-    """Window selection and heading-frame transform shared by the device sensors."""
+class _DeviceWindow(Sensor[DeviceConfigT]):
+    """Selection of the frames ``-past .. future`` from the reference's device window."""
 
     def __init__(self, config: PluginConfig | None = None) -> None:
         super().__init__(config)
@@ -102,6 +99,10 @@ class _DeviceSensor(Sensor[DeviceConfigT]):
             idx = torch.tensor(found, dtype=torch.long)
         self._window_cache = (offsets, idx)
         return idx
+
+
+class _DeviceSensor(_DeviceWindow[PoseConfigT]):
+    """Device poses in the simulated character's heading frame."""
 
     def _devices(self, ctx: StepContext, count: int) -> tuple[torch.Tensor, torch.Tensor]:
         """Positions ``(N, F, d, 3)`` and 6D rotations ``(N, F, d, 6)`` of the first ``count``
@@ -152,31 +153,49 @@ class ThreePoint(_DeviceSensor[ThreePointConfig]):
     Per frame: headset position (3) + 6D orientation (6), then left and right controller
     position (3 each) + 6D orientation (6 each) when ``controller_rotation`` (27 values), or
     positions only (15 values), QuestEnvSim's choice since controller orientation depends on how
-    a user holds them; with ``tracking``, then the left and right controller's tracked flag.
+    a user holds them.
     """
 
     name = "three_point"
     requires = ("site:head", "site:left_hand", "site:right_hand")
 
     def _features_per_frame(self) -> int:
-        return (27 if self.config.controller_rotation else 15) + (2 if self.config.tracking else 0)
+        return 27 if self.config.controller_rotation else 15
 
     def observe(self, ctx: StepContext) -> torch.Tensor:
         import torch
         pos, rot = self._devices(ctx, 3)
-        n, frames = pos.shape[:2]
         if self.config.controller_rotation:
-            per_frame = torch.cat([pos, rot], dim=-1).flatten(2)  # (N, F, 27)
+            per_device = torch.cat([pos, rot], dim=-1)  # (N, F, 3, 9)
         else:
             hmd = torch.cat([pos[:, :, :1], rot[:, :, :1]], dim=-1).flatten(2)  # (N, F, 9)
-            per_frame = torch.cat([hmd, pos[:, :, 1:].flatten(2)], dim=-1)  # (N, F, 15)
-        if self.config.tracking:
-            tracked = ctx.ref.tracked()[:, self._window(tuple(ctx.ref.window_offsets)), 1:3]
-            per_frame = torch.cat([per_frame, tracked.to(per_frame.dtype)], dim=-1)
-        return per_frame.reshape(n, frames * self._features_per_frame()).float()
+            per_device = torch.cat([hmd, pos[:, :, 1:].flatten(2)], dim=-1)  # (N, F, 15)
+        return per_device.reshape(ctx.num_envs, -1).float()
+
+
+class ControllerTracking(_DeviceWindow[DeviceWindowConfig]):
+    """Whether each controller is tracked, per frame: left then right, 1 tracked, 0 lost (its
+    last pose held in ``three_point``), as headset runtimes report it.
+
+    Beside ``three_point``: without it a held controller looks like a still hand, so a policy
+    trained with controllers that lose tracking (``env.device_noise.lost``) learns to doubt
+    every still one. Its own source, so a three-point policy
+    started from one without it (``--init-from``) keeps its device weights and learns these
+    from zero."""
+
+    name = "controller_tracking"
+    requires = ("site:left_hand", "site:right_hand")
+
+    def _features_per_frame(self) -> int:
+        return 2
+
+    def observe(self, ctx: StepContext) -> torch.Tensor:
+        tracked = ctx.ref.tracked()[:, self._window(tuple(ctx.ref.window_offsets)), 1:3]
+        return tracked.reshape(ctx.num_envs, -1).float()
 
 
 @retarget.hookimpl
 def register_sensors(register) -> None:
     register(Hmd)
     register(ThreePoint)
+    register(ControllerTracking)

@@ -10,7 +10,7 @@ import torch
 
 from retarget import PluginError
 from retarget.geometry.heading import quat_apply, quat_mul, quat_to_6d, yaw_quat
-from retarget.plugins.sensors.devices import Hmd, ThreePoint
+from retarget.plugins.sensors.devices import ControllerTracking, Hmd, ThreePoint
 from retarget.testing import fake_context, tiny_world
 
 LAYOUT = tiny_world().layout
@@ -49,26 +49,22 @@ def test_sizes() -> None:
     assert ThreePoint(ThreePoint.Config(past=2, future=1)).spec(LAYOUT).shape == (4 * 27,)
 
 
-def test_tracking_appends_each_controllers_flag_per_frame() -> None:
+def test_controller_tracking_gives_each_controllers_flag_per_frame() -> None:
     ctx = _at_origin(fake_context(LAYOUT, 3, seed=4))  # window offsets -2..2
-    sensor = ThreePoint(ThreePoint.Config(past=1, tracking=True))
-    assert sensor.spec(LAYOUT).shape == (2 * 29,)
-    plain = _observe(ThreePoint(ThreePoint.Config(past=1)), ctx).reshape(3, 2, 27)
-    out = _observe(sensor, ctx).reshape(3, 2, 29)
-    assert torch.equal(out[..., :27], plain)  # the poses as without the flags
-    assert (out[..., 27:] == 1).all()  # a reference without flags: every device tracked
+    sensor = ControllerTracking(ControllerTracking.Config(past=1))
+    assert sensor.spec(LAYOUT).shape == (2 * 2,)
+    assert (_observe(sensor, ctx) == 1).all()  # a reference without flags: every one tracked
     tracked = torch.ones(3, 5, 3, dtype=torch.bool)
     tracked[1, 2, 2] = False  # environment 1: the right controller lost now (offset 0)
     tracked[2, 0, 1] = False  # environment 2: the left one lost before the window
     tracked[0, 3, 0] = False  # a headset flag is not a controller's
     lost = replace(ctx, ref=replace(ctx.ref, devices_tracked=tracked))
-    out = _observe(sensor, lost).reshape(3, 2, 29)
-    assert torch.equal(out[..., :27], plain)
-    flags = torch.ones(3, 2, 2)
+    flags = torch.ones(3, 2, 2)  # (environment, frame: -1 then 0, left / right)
     flags[1, 1, 1] = 0.0
-    assert torch.equal(out[..., 27:], flags)
-    no_rotation = ThreePoint(ThreePoint.Config(past=0, controller_rotation=False, tracking=True))
-    assert torch.equal(_observe(no_rotation, lost)[:, 15:], flags[:, 1])
+    assert torch.equal(_observe(sensor, lost).reshape(3, 2, 2), flags)
+    ahead = ControllerTracking(ControllerTracking.Config(past=0, future=2))
+    assert torch.equal(_observe(ahead, lost).reshape(3, 3, 2)[:, 0], flags[:, 1])
+    assert torch.equal(_observe(ThreePoint(), lost), _observe(ThreePoint(), ctx))  # poses only
 
 
 def test_values_in_world_aligned_frame() -> None:
