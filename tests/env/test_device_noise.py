@@ -141,10 +141,16 @@ def test_lost_state_round_trips_and_old_states_load() -> None:
     assert (noise.lost_from == -1).all()  # a new episode starts tracked
 
 
-def test_the_env_holds_a_lost_controller_in_training() -> None:
+def _losing_env():
+    """16 environments in training whose controllers are lost often (10 per second)."""
     env = _env(16, "env.device_noise={height: 0.0, scale: 0.0, lost: 10.0, lost_seconds: 2.0}")
     env.reset()
     env.device_noise.active = True
+    return env
+
+
+def test_the_env_holds_a_lost_controller_in_training() -> None:
+    env = _losing_env()
     for _ in range(12):
         ctx = env._context(torch.zeros(16, env.action_dim))
         env.frame = env.frame + 1
@@ -157,9 +163,7 @@ def test_the_env_holds_a_lost_controller_in_training() -> None:
 
 
 def test_a_held_controller_is_reported_untracked_while_it_is_held() -> None:
-    env = _env(16, "env.device_noise={height: 0.0, scale: 0.0, lost: 10.0, lost_seconds: 2.0}")
-    env.reset()
-    env.device_noise.active = True
+    env = _losing_env()
     for _ in range(12):
         ctx = env._context(torch.zeros(16, env.action_dim))
         tracked, lost = ctx.ref.devices_tracked, env.device_noise.lost_from
