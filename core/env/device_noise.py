@@ -67,14 +67,17 @@ class DeviceNoise:
         self.lost_to[env_ids] = -1
         self.drawn_at[env_ids] = -1
 
-    def hold(self, devices: torch.Tensor, frame: torch.Tensor, window: Sequence[int],
-             pose_at: Callable[[torch.Tensor], torch.Tensor]) -> torch.Tensor:  # fmt: skip
+    def hold(self, devices: torch.Tensor, tracked: torch.Tensor, frame: torch.Tensor,
+             window: Sequence[int], pose_at: Callable[[torch.Tensor], torch.Tensor],
+             ) -> tuple[torch.Tensor, torch.Tensor]:  # fmt: skip
         """``devices`` ``(N, W, D, 7)`` (window frames ``frame + window``) with lost controllers
-        held at their pose of the frame they were lost (a copy); ``pose_at(frames)`` gives the
-        ``(N, D, 7)`` devices of each environment's clip at ``frames`` ``(N,)``. Unchanged when
-        inactive or ``lost`` is 0."""
+        held at their pose of the frame they were lost, and their ``tracked`` ``(N, W, D)``
+        flags false there (copies): a runtime reports a lost controller untracked while it
+        holds its pose, so a policy that reads the flag learns when the held pose is not the
+        hand's. ``pose_at(frames)`` gives the ``(N, D, 7)`` devices of each environment's clip
+        at ``frames`` ``(N,)``. Both unchanged when inactive or ``lost`` is 0."""
         if not self.active or self.options.lost <= 0.0:
-            return devices
+            return devices, tracked
         n, k = self.lost_from.shape
         frame = frame.long()
         ended = (self.lost_from >= 0) & ((frame[:, None] > self.lost_to)
@@ -89,35 +92,16 @@ class DeviceNoise:
         self.lost_from = torch.where(start, frames, self.lost_from)
         self.lost_to = torch.where(start, frames + length, self.lost_to)
         if not bool((self.lost_from >= 0).any()):
-            return devices
-        out = devices.clone()
-        masks = self._held(frame, window)  # (N, W, controllers)
+            return devices, tracked
+        out, flags = devices.clone(), tracked.clone()
+        at = frame[:, None] + torch.as_tensor(window, dtype=torch.long)[None, :]  # (N, W)
         for j, d in enumerate(self.CONTROLLERS):
-            held = pose_at(self.lost_from[:, j].clamp(min=0))[:, d]  # (N, 7)
-            mask = masks[..., j]
+            lost = self.lost_from[:, j]
+            held = pose_at(lost.clamp(min=0))[:, d]  # (N, 7)
+            mask = (lost[:, None] >= 0) & (at >= lost[:, None])  # (N, W)
             out[:, :, d] = torch.where(mask[..., None], held[:, None].to(out.dtype), out[:, :, d])
-        return out
-
-    def _held(self, frame: torch.Tensor, window: Sequence[int]) -> torch.Tensor:
-        """``(N, W, controllers)`` bool: which window entries show a lost controller's held
-        pose (entries from the frame it was lost on)."""
-        at = frame.long()[:, None] + torch.as_tensor(window, dtype=torch.long)[None, :]
-        lost = self.lost_from[:, None, :]  # (N, 1, controllers)
-        return (lost >= 0) & (at[..., None] >= lost)
-
-    def tracked(self, tracked: torch.Tensor, frame: torch.Tensor,
-                window: Sequence[int]) -> torch.Tensor:  # fmt: skip
-        """``tracked`` ``(N, W, D)`` with the entries :meth:`hold` held at this ``frame`` set
-        false: the runtime reports a lost controller as untracked while it holds its pose, so
-        a policy that reads the flag learns when the held pose is not the hand's. Call after
-        :meth:`hold` of the same step; unchanged when inactive or ``lost`` is 0."""
-        if not self.active or self.options.lost <= 0.0 or not bool((self.lost_from >= 0).any()):
-            return tracked
-        out = tracked.clone()
-        held = self._held(frame, window)
-        for j, d in enumerate(self.CONTROLLERS):
-            out[:, :, d] &= ~held[..., j]
-        return out
+            flags[:, :, d] &= ~mask
+        return out, flags
 
     def apply(self, devices: torch.Tensor) -> torch.Tensor:
         """``devices`` ``(N, W, D, 7)`` with heights moved (a copy); unchanged when inactive."""

@@ -295,9 +295,9 @@ class RetargetEnv:
         devices, tracked = lib.devices[window], lib.devices_tracked[window]
         if self.device_noise is not None:
             devices = self.device_noise.apply(devices)
-            devices = self.device_noise.hold(devices, self.frame, self.window_offsets,
-                                             self._noisy_devices_at)  # fmt: skip
-            tracked = self.device_noise.tracked(tracked, self.frame, self.window_offsets)
+            devices, tracked = self.device_noise.hold(devices, tracked, self.frame,
+                                                      self.window_offsets,
+                                                      self._noisy_devices_at)  # fmt: skip
         need = self._needs
         ahead = {}
         if need.reference_offsets:

@@ -95,31 +95,35 @@ def test_lost_controllers_are_held_at_the_frame_they_were_lost() -> None:
     window = (-2, -1, 0)
     frame = torch.full((64,), 10)
     devices = torch.stack([_poses_by_frame(frame + w) for w in window], dim=1)  # (N, W, D, 7)
-    assert noise.hold(devices, frame, window, _poses_by_frame) is devices  # inactive
+    flags = torch.ones(devices.shape[:-1], dtype=torch.bool)
+    assert noise.hold(devices, flags, frame, window, _poses_by_frame)[0] is devices  # inactive
     noise.active = True
     seen_lost = 0
     for step in range(30):
         frame = torch.full((64,), 10 + step)
         devices = torch.stack([_poses_by_frame(frame + w) for w in window], dim=1)
-        held = noise.hold(devices, frame, window, _poses_by_frame)
+        held, tracked = noise.hold(devices, flags, frame, window, _poses_by_frame)
         assert torch.equal(held[:, :, 0], devices[:, :, 0])  # the headset is never lost
+        assert tracked[:, :, 0].all()
         for j, d in enumerate(DeviceNoise.CONTROLLERS):
             lost = noise.lost_from[:, j]
             for w_i, w in enumerate(window):
                 entry = frame + w
                 expect = torch.where((lost >= 0) & (entry >= lost), lost, entry).double()
                 assert torch.equal(held[:, w_i, d, 0], expect)
+                assert torch.equal(~tracked[:, w_i, d], (lost >= 0) & (entry >= lost))
             seen_lost += int((lost >= 0).sum())
     assert seen_lost > 0
     # the same frame read twice (a step with resets) draws no new loss
     before = noise.lost_from.clone()
     for _ in range(5):  # at a third of a chance per step, five fresh frames would start some
-        noise.hold(devices, frame, window, _poses_by_frame)
+        noise.hold(devices, flags, frame, window, _poses_by_frame)
     assert torch.equal(noise.lost_from, before)
     # a loss ends: past its last frame the controller follows again
     later = torch.full((64,), 10 + 30 + 31)
     noise.options = DeviceNoiseOptions(height=0.0, scale=0.0, lost=1e-9)
-    out = noise.hold(_poses_by_frame(later)[:, None], later, (0,), _poses_by_frame)
+    out, _ = noise.hold(_poses_by_frame(later)[:, None], flags[:, :1], later, (0,),
+                        _poses_by_frame)
     assert torch.equal(out[:, 0, :, 0], later.double()[:, None].expand(-1, 3))
 
 
@@ -129,7 +133,8 @@ def test_lost_state_round_trips_and_old_states_load() -> None:
     noise.active = True
     frame = torch.full((8,), 5)
     for _ in range(5):
-        noise.hold(_poses_by_frame(frame)[:, None], frame, (0,), _poses_by_frame)
+        noise.hold(_poses_by_frame(frame)[:, None], torch.ones(8, 1, 3, dtype=torch.bool), frame,
+                   (0,), _poses_by_frame)
     assert (noise.lost_from >= 0).any()
     again = DeviceNoise(options, num_envs=8, seed=0)
     again.load_state_dict(noise.state_dict())
