@@ -18,6 +18,7 @@ from collections.abc import Sequence
 import retarget
 from retarget.cli import (
     average_cmd,
+    blend_cmd,
     eval_cmd,
     export_cmd,
     play_cmd,
@@ -83,6 +84,7 @@ def build_parser(registry: Registry) -> argparse.ArgumentParser:
     play_cmd.add_parser(sub)
     export_cmd.add_parser(sub)
     average_cmd.add_parser(sub)
+    blend_cmd.add_parser(sub)
     serve_cmd.add_parser(sub)
     stream_cmd.add_parser(sub)
     view_cmd.add_parser(sub)
