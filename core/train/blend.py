@@ -32,7 +32,7 @@ from retarget.train.checkpoint import save_checkpoint
 from retarget.train.load import load_run
 from retarget.train.package_model import policy_only
 from retarget.train.run_dir import CHECKPOINTS, LOCK
-from retarget.train.warm_start import input_maps, warm_start
+from retarget.train.warm_start import warm_start
 
 BLENDED_FROM = "blended_from.json"
 """In the new run's directory: the start, the fine-tune and the weight of the blend."""
@@ -59,10 +59,10 @@ def _mix(start: Any, tuned: Any, weight: float, where: str) -> Any:
 
 
 def _check_statistics(start: Mapping[str, Any], tuned: Mapping[str, Any],
-                      kept: Mapping[str, torch.Tensor], tuned_run: Path) -> None:  # fmt: skip
+                      inputs: Mapping[str, torch.Tensor], tuned_run: Path) -> None:  # fmt: skip
     """Refuse runs whose shared inputs are normalised differently (not a fine-tune and its
     start): the blend of their weights would read each input at another scale."""
-    for group, index in kept.items():
+    for group, index in inputs.items():
         known = index >= 0
         for stat in ("mean", "var"):
             key = f"groups.{group}.{stat}"
@@ -93,12 +93,10 @@ def blend_runs(tuned: str | Path, start: str | Path, weight: float, out: str | P
     # a copy: state dicts share storage with the network, which the warm start overwrites
     tuned_state = copy.deepcopy(policy_only({"algorithm": loaded.algorithm.state_dict()}))
     tuned_state = tuned_state["algorithm"]
-    origin = load_run(start, registry, num_envs=1)
-    maps, _ = input_maps(loaded.env.obs_layout, origin.env.obs_layout)
     info = warm_start(loaded.algorithm, loaded.env.obs_layout, start, registry)
     start_state = policy_only({"algorithm": loaded.algorithm.state_dict()})["algorithm"]
-    _check_statistics(start_state.get(STATISTICS, {}), tuned_state.get(STATISTICS, {}), maps,
-                      loaded.run)  # fmt: skip
+    _check_statistics(start_state.get(STATISTICS, {}), tuned_state.get(STATISTICS, {}),
+                      info.inputs, loaded.run)  # fmt: skip
     mixed = _mix(start_state, tuned_state, weight, "algorithm")
     (target / CHECKPOINTS).mkdir(parents=True, exist_ok=True)
     shutil.copy2(loaded.run / LOCK, target / LOCK)

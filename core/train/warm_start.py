@@ -9,7 +9,7 @@ one lacks are dropped; new ones start at zero weight (see :mod:`retarget.learn.w
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import torch
@@ -33,6 +33,8 @@ class WarmStart:
     kept: dict[str, list[str]]
     new: dict[str, list[str]]
     dropped: dict[str, list[str]]
+    inputs: dict[str, torch.Tensor] = field(default_factory=dict)
+    """Per group, the old column feeding each new column (-1: new), as :func:`input_maps`."""
 
     def summary(self) -> str:
         parts = []
@@ -82,7 +84,7 @@ def warm_start(
     whose observation ``layout`` is given). Errors name the checkpoint and what did not fit."""
     old = load_run(source, registry, num_envs=1)
     maps, info = input_maps(layout, old.env.obs_layout)
-    info.checkpoint = old.checkpoint
+    info.checkpoint, info.inputs = old.checkpoint, maps
     if not any(info.kept.values()):
         raise RecipeError(
             "the new run observes nothing the source run observed",
