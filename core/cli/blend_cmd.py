@@ -25,6 +25,8 @@ def run(args: argparse.Namespace, registry: Registry) -> int:
     from retarget.cli.console import out
     from retarget.train.blend import BLENDED_FROM, blend_runs
 
-    target = blend_runs(args.run, args.start, args.weight, args.out, registry)
+    # loading both runs (their environments and clips) takes a minute on a laptop
+    with out.status(f"loading {args.run} and {args.start}"):
+        target = blend_runs(args.run, args.start, args.weight, args.out, registry)
     out.print(f"wrote {target} ({args.weight:g} of the fine-tune; {target / BLENDED_FROM})")
     return 0
