@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import json
 import shutil
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -40,19 +40,27 @@ KEEP = ("train_settings.json", "metrics.csv", "init_from.txt")
 """Files of the source run copied beside the lock (a card's samples and CPU-hours read them)."""
 
 
-def _add(total: Any, value: Any, file: Path, where: str) -> Any:
-    """``total`` (a running sum: floating tensors in float64) plus ``value``, one checkpoint's
-    entry; other leaves take ``value``'s (so counters end as the newest checkpoint's)."""
-    if isinstance(total, dict):
-        if not isinstance(value, dict) or value.keys() != total.keys():
-            raise RetargetError(f"'{where}' holds other entries than in the checkpoints before",
-                                file=str(file), hint="average checkpoints of one run")  # fmt: skip
-        return type(value)((k, _add(total[k], value[k], file, f"{where}.{k}")) for k in value)
-    if isinstance(total, torch.Tensor) and total.is_floating_point():
-        if not isinstance(value, torch.Tensor) or value.shape != total.shape:
-            raise RetargetError(f"'{where}' has another shape than in the checkpoints before",
-                                file=str(file), hint="average checkpoints of one run")  # fmt: skip
-        return total + value.double()
+def combine(base: Any, value: Any, fn: Callable[[torch.Tensor, torch.Tensor], torch.Tensor], *,
+            file: Path, where: str, against: str, hint: str, keep: tuple[str, ...] = ()) -> Any:
+    """``value``'s tree with each floating tensor ``fn(base's, value's)``; other leaves, and
+    entries named in ``keep``, are ``value``'s. Two checkpoints of one network have the same
+    entries and shapes: anything else is an error naming the entry, ``file`` and ``against``
+    (what ``base`` is), so averaged or blended weights never mix different networks."""
+    if isinstance(base, Mapping):
+        if not isinstance(value, Mapping) or value.keys() != base.keys():
+            raise RetargetError(f"'{where}' holds other entries {against}", file=str(file),
+                                hint=hint)  # fmt: skip
+        return type(value)(
+            (k, value[k] if k in keep else combine(base[k], value[k], fn, file=file,
+                                                   where=f"{where}.{k}", against=against,
+                                                   hint=hint, keep=keep))
+            for k in value
+        )  # fmt: skip
+    if isinstance(base, torch.Tensor) and base.is_floating_point():
+        if not isinstance(value, torch.Tensor) or value.shape != base.shape:
+            raise RetargetError(f"'{where}' has another shape {against}", file=str(file),
+                                hint=hint)  # fmt: skip
+        return fn(base, value)
     return value
 
 
@@ -79,7 +87,9 @@ def average_state(files: Sequence[Path]) -> dict[str, Any]:
         if total is None:
             total = _floats(algorithm, lambda t, _: t.double(), algorithm)
         else:
-            total = _add(total, algorithm, file, "algorithm")
+            total = combine(total, algorithm, lambda t, v: t + v.double(), file=file,
+                            where="algorithm", against="than in the checkpoints before",
+                            hint="average checkpoints of one run")  # fmt: skip
     mean = _floats(total, lambda t, like: (t / len(files)).to(like.dtype), newest["algorithm"])
     return {"algorithm": mean,
             "progress": newest.get("progress", {})}  # fmt: skip

@@ -27,7 +27,7 @@ import torch
 
 from retarget.errors import RetargetError
 from retarget.registry import Registry
-from retarget.train.average import KEEP
+from retarget.train.average import KEEP, combine
 from retarget.train.checkpoint import save_checkpoint
 from retarget.train.load import load_run
 from retarget.train.package_model import policy_only
@@ -37,25 +37,6 @@ from retarget.train.warm_start import warm_start
 BLENDED_FROM = "blended_from.json"
 """In the new run's directory: the start, the fine-tune and the weight of the blend."""
 STATISTICS = "obs_norm"  # the algorithm state's observation statistics (taken, not blended)
-
-
-def _mix(start: Any, tuned: Any, weight: float, where: str) -> Any:
-    """``tuned``'s tree with each floating tensor ``(1 - weight) * start + weight * tuned``."""
-    if isinstance(tuned, Mapping):
-        if not isinstance(start, Mapping) or start.keys() != tuned.keys():
-            raise RetargetError(f"'{where}' holds other entries in the two runs",
-                                hint="blend a fine-tune with the run it started from")  # fmt: skip
-        return type(tuned)(
-            (k, tuned[k] if k == STATISTICS else _mix(start[k], tuned[k], weight, f"{where}.{k}"))
-            for k in tuned
-        )
-    if isinstance(tuned, torch.Tensor) and tuned.is_floating_point():
-        if not isinstance(start, torch.Tensor) or start.shape != tuned.shape:
-            raise RetargetError(f"'{where}' has another shape in the two runs",
-                                hint="blend a fine-tune with the run it started from")  # fmt: skip
-        mixed = (1.0 - weight) * start.double() + weight * tuned.double()
-        return mixed.to(tuned.dtype)
-    return tuned
 
 
 def _check_statistics(start: Mapping[str, Any], tuned: Mapping[str, Any],
@@ -97,7 +78,12 @@ def blend_runs(tuned: str | Path, start: str | Path, weight: float, out: str | P
     start_state = policy_only({"algorithm": loaded.algorithm.state_dict()})["algorithm"]
     _check_statistics(start_state.get(STATISTICS, {}), tuned_state.get(STATISTICS, {}),
                       info.inputs, loaded.run)  # fmt: skip
-    mixed = _mix(start_state, tuned_state, weight, "algorithm")
+    mixed = combine(
+        start_state, tuned_state,
+        lambda a, b: ((1.0 - weight) * a.double() + weight * b.double()).to(b.dtype),
+        file=loaded.checkpoint, where="algorithm", against="than in the start run",
+        hint="blend a fine-tune with the run it started from", keep=(STATISTICS,),
+    )  # fmt: skip
     (target / CHECKPOINTS).mkdir(parents=True, exist_ok=True)
     shutil.copy2(loaded.run / LOCK, target / LOCK)
     for name in KEEP:
